@@ -1,0 +1,1 @@
+"""conesim envs package."""

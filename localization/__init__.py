@@ -1,0 +1,7 @@
+"""Localization: geodesy, the frame tree (tf2 semantics), GPS/IMU fusion, TF broadcaster.
+
+This package's ``__init__`` stays import-light on purpose: ``localization.pose``,
+``localization.geodesy`` (and, later, ``localization.messages``) are dependency-free
+leaf modules that the track loader and the simulator's sensor models share, the
+way every ROS node shares ``geometry_msgs`` and ``sensor_msgs``.
+"""

@@ -1,0 +1,170 @@
+"""GPS <-> local Cartesian conversion for the `reference` frame.
+
+Two projections, both vectorised over numpy arrays:
+
+* The seed's equirectangular projection (``gps_to_local_cartesian``), exactly as
+  the seed's ``gps_to_local_cartesian_node`` computes it, with R = 6378137 m::
+
+      x = (lon_r - ref_lon_r) * cos(ref_lat_r) * R
+      y = (lat_r - ref_lat_r) * R
+      z = 0
+
+  and its exact algebraic inverse (``local_cartesian_to_gps``), which the
+  simulator uses to generate fixes so that truth and estimate agree.
+
+* Exact WGS84 geodetic -> ECEF -> ENU (``geodetic_to_enu`` / ``enu_to_geodetic``),
+  through pymap3d (a well-kept library; no reason to hand-write the ellipsoid
+  maths). Use it far from the origin: at latitude 37.5 deg the seed's sphere
+  makes northing 0.300 % too large and easting 0.124 % too small (0.30 / 0.12 m
+  at 100 m; REFERENCES.md, "Geodesy").
+
+The module is a dependency-free leaf (numpy, pymap3d): the simulator's GPS
+receiver model imports it too.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pymap3d
+from numpy.typing import ArrayLike, NDArray
+
+R_EARTH = 6378137.0  # [m] the seed's R_EARTH (WGS84 equatorial radius)
+
+FloatArray = NDArray[np.float64]
+
+
+class GeodesyError(ValueError):
+    """A latitude, longitude or origin that cannot be converted."""
+
+
+def _check_lat_lon(lat: FloatArray, lon: FloatArray, where: str) -> None:
+    if not (np.all(np.isfinite(lat)) and np.all(np.isfinite(lon))):
+        raise GeodesyError(f"{where}: latitude/longitude must be finite (got NaN or inf)")
+    if np.any(np.abs(lat) > 90.0):
+        raise GeodesyError(f"{where}: latitude out of range [-90, 90] deg: {lat.max()!r}")
+    if np.any(np.abs(lon) > 180.0):
+        raise GeodesyError(f"{where}: longitude out of range [-180, 180] deg: {lon.max()!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class ReferenceOrigin:
+    """The geodetic origin of the `reference` frame (ENU).
+
+    Attributes:
+        lat_deg: latitude [deg], in [-90, 90] (the seed's launch default 37.540190).
+        lon_deg: longitude [deg], in [-180, 180] (the seed's default 127.076488).
+        alt_m: ellipsoidal height [m]; only the exact WGS84 conversion uses it.
+    """
+
+    lat_deg: float = 37.540190
+    lon_deg: float = 127.076488
+    alt_m: float = 0.0
+
+    def __post_init__(self) -> None:
+        _check_lat_lon(np.asarray(self.lat_deg), np.asarray(self.lon_deg), "ReferenceOrigin")
+        if not math.isfinite(self.alt_m):
+            raise GeodesyError(f"ReferenceOrigin.alt_m must be finite, got {self.alt_m!r}")
+        if abs(self.lat_deg) >= 89.9:
+            raise GeodesyError(
+                f"ReferenceOrigin.lat_deg={self.lat_deg}: the equirectangular projection "
+                "is singular at the poles; allowed range is (-89.9, 89.9) deg"
+            )
+
+
+DEFAULT_ORIGIN = ReferenceOrigin()
+
+
+def gps_to_local_cartesian(
+    lat_deg: ArrayLike, lon_deg: ArrayLike, origin: ReferenceOrigin = DEFAULT_ORIGIN
+) -> tuple[FloatArray, FloatArray]:
+    """The seed's projection: geodetic -> (x east, y north) in `reference`.
+
+    Args:
+        lat_deg: latitude(s) [deg], any shape.
+        lon_deg: longitude(s) [deg], same shape.
+        origin: the `reference` origin.
+
+    Returns:
+        (x, y) [m], arrays of the input shape. z is 0 by the seed's definition.
+
+    Raises:
+        GeodesyError: NaN/inf or out-of-range latitude or longitude.
+    """
+    lat = np.asarray(lat_deg, dtype=float)
+    lon = np.asarray(lon_deg, dtype=float)
+    _check_lat_lon(lat, lon, "gps_to_local_cartesian")
+    lat_r, lon_r = np.radians(lat), np.radians(lon)
+    ref_lat_r, ref_lon_r = math.radians(origin.lat_deg), math.radians(origin.lon_deg)
+    x = (lon_r - ref_lon_r) * math.cos(ref_lat_r) * R_EARTH
+    y = (lat_r - ref_lat_r) * R_EARTH
+    return x, y
+
+
+def local_cartesian_to_gps(
+    x: ArrayLike, y: ArrayLike, origin: ReferenceOrigin = DEFAULT_ORIGIN
+) -> tuple[FloatArray, FloatArray]:
+    """Exact inverse of :func:`gps_to_local_cartesian`.
+
+    Args:
+        x: east [m] in `reference`, any shape.
+        y: north [m], same shape.
+        origin: the `reference` origin.
+
+    Returns:
+        (lat, lon) [deg].
+
+    Raises:
+        GeodesyError: NaN/inf input, or a point that maps beyond the poles.
+    """
+    xa = np.asarray(x, dtype=float)
+    ya = np.asarray(y, dtype=float)
+    if not (np.all(np.isfinite(xa)) and np.all(np.isfinite(ya))):
+        raise GeodesyError("local_cartesian_to_gps: x/y must be finite (got NaN or inf)")
+    ref_lat_r, ref_lon_r = math.radians(origin.lat_deg), math.radians(origin.lon_deg)
+    lat = np.degrees(ya / R_EARTH + ref_lat_r)
+    lon = np.degrees(xa / (R_EARTH * math.cos(ref_lat_r)) + ref_lon_r)
+    _check_lat_lon(lat, lon, "local_cartesian_to_gps")
+    return lat, lon
+
+
+def geodetic_to_enu(
+    lat_deg: ArrayLike,
+    lon_deg: ArrayLike,
+    alt_m: ArrayLike = 0.0,
+    origin: ReferenceOrigin = DEFAULT_ORIGIN,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Exact WGS84 geodetic -> ECEF -> ENU about ``origin`` (pymap3d).
+
+    Returns:
+        (east, north, up) [m].
+    """
+    lat = np.asarray(lat_deg, dtype=float)
+    lon = np.asarray(lon_deg, dtype=float)
+    _check_lat_lon(lat, lon, "geodetic_to_enu")
+    e, n, u = pymap3d.geodetic2enu(
+        lat, lon, np.asarray(alt_m, dtype=float), origin.lat_deg, origin.lon_deg, origin.alt_m
+    )
+    return np.asarray(e, dtype=float), np.asarray(n, dtype=float), np.asarray(u, dtype=float)
+
+
+def enu_to_geodetic(
+    east: ArrayLike,
+    north: ArrayLike,
+    up: ArrayLike = 0.0,
+    origin: ReferenceOrigin = DEFAULT_ORIGIN,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Exact WGS84 ENU about ``origin`` -> geodetic (pymap3d).
+
+    Returns:
+        (lat [deg], lon [deg], alt [m]).
+    """
+    e = np.asarray(east, dtype=float)
+    n = np.asarray(north, dtype=float)
+    u = np.asarray(up, dtype=float)
+    if not (np.all(np.isfinite(e)) and np.all(np.isfinite(n)) and np.all(np.isfinite(u))):
+        raise GeodesyError("enu_to_geodetic: east/north/up must be finite (got NaN or inf)")
+    lat, lon, alt = pymap3d.enu2geodetic(e, n, u, origin.lat_deg, origin.lon_deg, origin.alt_m)
+    return np.asarray(lat, dtype=float), np.asarray(lon, dtype=float), np.asarray(alt, dtype=float)

@@ -1,0 +1,270 @@
+"""The global path: the seed's ``lat,lon,cov`` CSV, loaded into `reference`.
+
+The seed's ``status_colored_path_publisher`` reads one ``lat,lon,cov`` per line,
+projects each point with the same reference origin as ``gps_to_local_cartesian``
+and colours each point red where ``cov`` exceeds a threshold (0.0025 m^2, i.e. a
+5 cm standard deviation) and green otherwise. This module is that node's data
+half: reader, writer, status, and a path derived from a track's centreline for
+tracks that ship without one.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from localization.geodesy import (
+    DEFAULT_ORIGIN,
+    ReferenceOrigin,
+    gps_to_local_cartesian,
+    local_cartesian_to_gps,
+)
+
+if TYPE_CHECKING:
+    from tracks import Track
+
+COV_THRESHOLD_M2 = 0.0025  # [m^2] seed: "error > threshold, e.g. >5 cm if threshold=0.0025"
+DERIVED_PATH_COV_M2 = 0.0004  # [m^2] a path surveyed from the cones: 2 cm sigma
+MIN_POINTS = 2  # a path needs at least one segment
+
+FloatArray = NDArray[np.float64]
+
+
+class GlobalPathError(ValueError):
+    """A malformed global path file or array; the message names file and line."""
+
+
+@dataclass(frozen=True)
+class GlobalPath:
+    """A global path in `reference` with its per-point covariance.
+
+    Attributes:
+        xy: (n, 2) points in `reference` [m], in driving order.
+        cov: (n,) position covariance of each point [m^2].
+        lat: (n,) latitude [deg] of each point, as read or written.
+        lon: (n,) longitude [deg].
+        origin: the `reference` origin the points were projected with.
+        closed: True when the last point joins back to the first (a loop).
+        cov_threshold: the seed's red/green threshold [m^2].
+    """
+
+    xy: FloatArray
+    cov: FloatArray
+    lat: FloatArray
+    lon: FloatArray
+    origin: ReferenceOrigin = DEFAULT_ORIGIN
+    closed: bool = False
+    cov_threshold: float = COV_THRESHOLD_M2
+
+    def __post_init__(self) -> None:
+        n = len(self.xy)
+        if self.xy.shape != (n, 2) or self.cov.shape != (n,):
+            raise GlobalPathError(
+                f"GlobalPath: xy must be (n, 2) and cov (n,), got {self.xy.shape} and "
+                f"{self.cov.shape}"
+            )
+        if n < MIN_POINTS:
+            raise GlobalPathError(f"GlobalPath: needs at least {MIN_POINTS} points, got {n}")
+        for array in (self.xy, self.cov, self.lat, self.lon):
+            array.setflags(write=False)
+
+    @property
+    def high_covariance(self) -> NDArray[np.bool_]:
+        """(n,) True where the seed draws the point red (cov > threshold)."""
+        return self.cov > self.cov_threshold
+
+    @property
+    def status(self) -> list[str]:
+        """(n,) the seed's colour per point: ``"red"`` or ``"green"``."""
+        return ["red" if high else "green" for high in self.high_covariance]
+
+    @property
+    def segments(self) -> tuple[FloatArray, FloatArray]:
+        """Segment start points and direction vectors, (k, 2) each [m].
+
+        A closed path includes the segment from the last point to the first.
+        """
+        pts = np.vstack([self.xy, self.xy[:1]]) if self.closed else self.xy
+        return pts[:-1], np.diff(pts, axis=0)
+
+    @property
+    def length_m(self) -> float:
+        """Total length along the path [m]."""
+        _, d = self.segments
+        return float(np.hypot(d[:, 0], d[:, 1]).sum())
+
+
+def global_path_from_geodetic(
+    lat: ArrayLike,
+    lon: ArrayLike,
+    cov: ArrayLike,
+    origin: ReferenceOrigin = DEFAULT_ORIGIN,
+    closed: bool | None = None,
+) -> GlobalPath:
+    """Build a path from geodetic points, projected with the seed's formula.
+
+    Args:
+        lat: (n,) [deg].
+        lon: (n,) [deg].
+        cov: (n,) [m^2], non-negative.
+        origin: the `reference` origin.
+        closed: whether the path is a loop; None decides from the geometry (the
+            last point lies within two median segment lengths of the first).
+    """
+    lat_a = np.asarray(lat, dtype=float).reshape(-1)
+    lon_a = np.asarray(lon, dtype=float).reshape(-1)
+    cov_a = np.asarray(cov, dtype=float).reshape(-1)
+    if not (len(lat_a) == len(lon_a) == len(cov_a)):
+        raise GlobalPathError("global path: lat, lon and cov must have the same length")
+    if not np.all(np.isfinite(cov_a)) or np.any(cov_a < 0):
+        raise GlobalPathError("global path: cov must be finite and >= 0")
+    x, y = gps_to_local_cartesian(lat_a, lon_a, origin)
+    xy = np.column_stack([x, y])
+    if closed is None:
+        closed = _looks_closed(xy)
+    return GlobalPath(xy=xy, cov=cov_a, lat=lat_a, lon=lon_a, origin=origin, closed=closed)
+
+
+def global_path_from_centreline(
+    xy: ArrayLike,
+    closed: bool,
+    origin: ReferenceOrigin = DEFAULT_ORIGIN,
+    cov: ArrayLike | float = DERIVED_PATH_COV_M2,
+) -> GlobalPath:
+    """Georeference a centreline in `reference` as a global path.
+
+    For tracks that come without a global path: the points are mapped to
+    lat/lon with the exact inverse of the seed projection, so reading the
+    written CSV back reproduces ``xy`` to ~1e-9 m.
+
+    Args:
+        xy: (n, 2) centreline points in `reference` [m], in driving order.
+        closed: whether the centreline is a loop.
+        origin: the `reference` origin.
+        cov: per-point covariance [m^2], scalar or (n,).
+    """
+    pts = np.asarray(xy, dtype=float).reshape(-1, 2)
+    cov_a = np.broadcast_to(np.asarray(cov, dtype=float), (len(pts),)).copy()
+    lat, lon = local_cartesian_to_gps(pts[:, 0], pts[:, 1], origin)
+    return global_path_from_geodetic(lat, lon, cov_a, origin, closed=closed)
+
+
+def _looks_closed(xy: FloatArray) -> bool:
+    if len(xy) < 4:
+        return False
+    step = float(np.median(np.hypot(*np.diff(xy, axis=0).T)))
+    return bool(np.hypot(*(xy[-1] - xy[0])) <= 2.0 * step)
+
+
+def read_global_path_csv(
+    path: str | os.PathLike[str],
+    origin: ReferenceOrigin = DEFAULT_ORIGIN,
+    closed: bool | None = None,
+) -> GlobalPath:
+    """Read the seed's global path CSV: one ``lat,lon,cov`` per line.
+
+    A first line ``lat,lon,cov`` is accepted as a header; blank lines are skipped.
+
+    Raises:
+        GlobalPathError: naming the file and line: unreadable or binary file,
+            wrong column count, non-numeric or non-finite field, latitude or
+            longitude out of range, negative covariance, a point repeated from
+            the one before it, or fewer than two points.
+    """
+    p = Path(path)
+    try:
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise GlobalPathError(f"{p}: cannot read global path: {exc.strerror}") from None
+    if b"\x00" in raw:
+        raise GlobalPathError(f"{p}: binary file, expected text lines 'lat,lon,cov'")
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise GlobalPathError(f"{p}: not UTF-8 text, expected lines 'lat,lon,cov'") from None
+    rows: list[tuple[float, float, float]] = []
+    for lineno, line in enumerate(text.splitlines(), start=1):
+        stripped = line.strip()
+        if not stripped or (lineno == 1 and stripped.replace(" ", "").lower() == "lat,lon,cov"):
+            continue
+        rows.append(_parse_row(stripped, p, lineno, rows))
+    if len(rows) < MIN_POINTS:
+        raise GlobalPathError(
+            f"{p}: a global path needs at least {MIN_POINTS} points, found {len(rows)}"
+        )
+    lat, lon, cov = (np.array(col) for col in zip(*rows, strict=True))
+    return global_path_from_geodetic(lat, lon, cov, origin, closed=closed)
+
+
+def _parse_row(
+    line: str, path: Path, lineno: int, previous: list[tuple[float, float, float]]
+) -> tuple[float, float, float]:
+    fields = [f.strip() for f in line.split(",")]
+    where = f"{path}:{lineno}"
+    if len(fields) != 3:
+        raise GlobalPathError(f"{where}: expected 3 columns 'lat,lon,cov', found {len(fields)}")
+    values = []
+    for name, field in zip(("lat", "lon", "cov"), fields, strict=True):
+        try:
+            value = float(field)
+        except ValueError:
+            raise GlobalPathError(f"{where}: column '{name}': {field!r} is not a number") from None
+        if not math.isfinite(value):
+            raise GlobalPathError(f"{where}: column '{name}': {field!r} is not finite")
+        values.append(value)
+    lat, lon, cov = values
+    if abs(lat) > 90.0:
+        raise GlobalPathError(f"{where}: column 'lat': {lat} is outside [-90, 90] deg")
+    if abs(lon) > 180.0:
+        raise GlobalPathError(f"{where}: column 'lon': {lon} is outside [-180, 180] deg")
+    if cov < 0.0:
+        raise GlobalPathError(f"{where}: column 'cov': {cov} is negative")
+    if previous and previous[-1][:2] == (lat, lon):
+        raise GlobalPathError(f"{where}: point repeats the one on the line before it")
+    return lat, lon, cov
+
+
+def write_global_path_csv(path: str | os.PathLike[str], global_path: GlobalPath) -> None:
+    """Write ``global_path`` as the seed's CSV (no header), atomically.
+
+    The file appears complete or not at all (temporary file + ``os.replace``).
+    Latitude and longitude are written with 12 decimals (~1e-7 m).
+    """
+    lines = [
+        f"{lat:.12f},{lon:.12f},{cov:.6g}\n"
+        for lat, lon, cov in zip(global_path.lat, global_path.lon, global_path.cov, strict=True)
+    ]
+    atomic_write_text(Path(path), "".join(lines))
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file and ``os.replace``."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def global_path_for_track(track: Track, origin: ReferenceOrigin = DEFAULT_ORIGIN) -> GlobalPath:
+    """The global path that goes with ``track``.
+
+    The track's own ``lat,lon,cov`` CSV when it has one; otherwise its true
+    centreline, georeferenced at ``origin`` (the issue's rule for tracks that
+    come without a global path, e.g. fssim, EUFS and FSDS files).
+    """
+    closed = track.layout == "closed"
+    if track.global_path_file is not None:
+        return read_global_path_csv(track.global_path_file, origin, closed=closed)
+    return global_path_from_centreline(track.centreline, closed=closed, origin=origin)

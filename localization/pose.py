@@ -1,0 +1,76 @@
+"""Planar pose type and angle helpers shared by every layer.
+
+A leaf module (numpy only), so that ``tracks`` and ``sim`` may use it without
+pulling in the rest of ``localization``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+
+def wrap_angle(angle: ArrayLike) -> NDArray[np.float64] | float:
+    """Wrap angles into [-pi, pi).
+
+    Args:
+        angle: scalar or array [rad].
+
+    Returns:
+        The wrapped angle(s) [rad]; a float for a scalar input.
+
+    >>> round(wrap_angle(3 * math.pi / 2), 12)
+    -1.570796326795
+    >>> wrap_angle(math.pi)
+    -3.141592653589793
+    >>> wrap_angle(np.array([0.0, 2 * math.pi + 0.5]))
+    array([0. , 0.5])
+    """
+    a = np.asarray(angle, dtype=float)
+    wrapped = (a + math.pi) % (2.0 * math.pi) - math.pi
+    if wrapped.ndim == 0:
+        return float(wrapped)
+    return wrapped
+
+
+@dataclass(frozen=True, slots=True)
+class Pose2D:
+    """A pose in the plane.
+
+    Attributes:
+        x: position east (or forward in a vehicle frame) [m].
+        y: position north (or left) [m].
+        yaw: heading, counter-clockwise from +x [rad] (REP 103).
+    """
+
+    x: float
+    y: float
+    yaw: float
+
+    def __post_init__(self) -> None:
+        for name in ("x", "y", "yaw"):
+            value = getattr(self, name)
+            if not math.isfinite(value):
+                raise ValueError(f"Pose2D.{name} must be finite, got {value!r}")
+
+    @property
+    def xy(self) -> NDArray[np.float64]:
+        """Position as a (2,) array [m]."""
+        return np.array([self.x, self.y])
+
+    def transform_points(self, points: ArrayLike) -> NDArray[np.float64]:
+        """Map (n, 2) points from this pose's frame into its parent frame [m]."""
+        p = np.asarray(points, dtype=float).reshape(-1, 2)
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        rot = np.array([[c, -s], [s, c]])
+        return p @ rot.T + self.xy
+
+    def inverse_transform_points(self, points: ArrayLike) -> NDArray[np.float64]:
+        """Map (n, 2) points from the parent frame into this pose's frame [m]."""
+        p = np.asarray(points, dtype=float).reshape(-1, 2) - self.xy
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        rot = np.array([[c, -s], [s, c]])
+        return p @ rot

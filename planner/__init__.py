@@ -1,0 +1,1 @@
+"""conesim planner package."""

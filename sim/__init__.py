@@ -1,0 +1,1 @@
+"""conesim sim package."""

@@ -1,0 +1,124 @@
+"""Tests for localization.global_path: the seed's lat,lon,cov CSV."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose
+
+from localization.geodesy import DEFAULT_ORIGIN, local_cartesian_to_gps
+from localization.global_path import (
+    COV_THRESHOLD_M2,
+    GlobalPathError,
+    global_path_from_centreline,
+    read_global_path_csv,
+    write_global_path_csv,
+)
+
+
+def circle(radius: float = 20.0, n: int = 100) -> np.ndarray:
+    """A counter-clockwise circle of ``n`` points."""
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return np.column_stack([radius * np.cos(t), radius * np.sin(t)])
+
+
+def test_csv_round_trip_reproduces_points(tmp_path: Path) -> None:
+    """Writing then reading a derived path gives the same xy to 1e-6 m and the cov exactly."""
+    xy = circle()
+    cov = np.where(np.arange(100) < 30, 0.01, 0.0004)
+    path = global_path_from_centreline(xy, closed=True, cov=cov)
+    write_global_path_csv(tmp_path / "p.csv", path)
+    back = read_global_path_csv(tmp_path / "p.csv")
+    assert_allclose(back.xy, xy, atol=1e-6)
+    assert_allclose(back.cov, cov)
+    assert back.closed
+    assert_allclose(back.length_m, 100 * 2 * 20 * np.sin(np.pi / 100), rtol=1e-9)
+
+
+def test_status_is_red_above_seed_threshold(tmp_path: Path) -> None:
+    """cov > 0.0025 m^2 is red, otherwise green (the seed's rule)."""
+    lat, lon = local_cartesian_to_gps(np.array([0.0, 10.0, 20.0]), np.zeros(3))
+    rows = [
+        f"{lat[0]},{lon[0]},0.0025",
+        f"{lat[1]},{lon[1]},0.0026",
+        f"{lat[2]},{lon[2]},0.0001",
+    ]
+    (tmp_path / "p.csv").write_text("lat,lon,cov\n" + "\n".join(rows) + "\n")
+    path = read_global_path_csv(tmp_path / "p.csv")
+    assert COV_THRESHOLD_M2 == 0.0025
+    assert path.status == ["green", "red", "green"]
+    assert_allclose(path.xy[:, 0], [0.0, 10.0, 20.0], atol=1e-9)
+    assert not path.closed
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("", "at least 2 points"),
+        ("37.54,127.07,0.1\n", "at least 2 points"),
+        ("37.54,127.07\n", ":1: expected 3 columns"),
+        ("37.54,127.07,0.1\n37.55,127.07,0.1,9\n", ":2: expected 3 columns"),
+        ("37.54,abc,0.1\n37.55,127.07,0.1\n", ":1: column 'lon': 'abc' is not a number"),
+        ("37.54,127.07,nan\n37.55,127.07,0.1\n", ":1: column 'cov': 'nan' is not finite"),
+        ("97.54,127.07,0.1\n37.55,127.07,0.1\n", ":1: column 'lat': 97.54 is outside"),
+        ("37.54,227.07,0.1\n37.55,127.07,0.1\n", ":1: column 'lon': 227.07 is outside"),
+        ("37.54,127.07,-1\n37.55,127.07,0.1\n", ":1: column 'cov': -1.0 is negative"),
+        ("37.54,127.07,0.1\n37.54,127.07,0.2\n", ":2: point repeats"),
+    ],
+)
+def test_malformed_csv_names_file_and_line(tmp_path: Path, content: str, message: str) -> None:
+    """Each malformation raises GlobalPathError naming the file, line and problem."""
+    f = tmp_path / "bad.csv"
+    f.write_text(content)
+    with pytest.raises(GlobalPathError, match=message) as info:
+        read_global_path_csv(f)
+    assert str(f) in str(info.value)
+
+
+def test_binary_and_missing_files(tmp_path: Path) -> None:
+    """A binary file and a missing file get one clear GlobalPathError."""
+    f = tmp_path / "bin.csv"
+    f.write_bytes(b"\x00\x01\x02\xff")
+    with pytest.raises(GlobalPathError, match="binary"):
+        read_global_path_csv(f)
+    with pytest.raises(GlobalPathError, match="cannot read"):
+        read_global_path_csv(tmp_path / "missing.csv")
+
+
+def test_writer_leaves_no_partial_file(tmp_path: Path) -> None:
+    """The writer replaces the target atomically; no temporary file is left behind."""
+    path = global_path_from_centreline(circle(), closed=True)
+    target = tmp_path / "out" / "p.csv"
+    write_global_path_csv(target, path)
+    assert [p.name for p in target.parent.iterdir()] == ["p.csv"]
+    assert target.read_text().count("\n") == 100
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.binary(max_size=300))
+def test_fuzz_reader_only_raises_global_path_error(
+    tmp_path_factory: pytest.TempPathFactory, data: bytes
+) -> None:
+    """Arbitrary bytes either parse or raise GlobalPathError, never anything else."""
+    f = tmp_path_factory.mktemp("fuzz") / "f.csv"
+    f.write_bytes(data)
+    try:
+        read_global_path_csv(f)
+    except GlobalPathError:
+        pass
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.text(alphabet="0123456789.,-eE\nnaif ", max_size=30), max_size=6))
+def test_fuzz_reader_text(tmp_path_factory: pytest.TempPathFactory, lines: list[str]) -> None:
+    """CSV-like text either parses or raises GlobalPathError."""
+    f = tmp_path_factory.mktemp("fuzz") / "f.csv"
+    f.write_text(f"{DEFAULT_ORIGIN.lat_deg},{DEFAULT_ORIGIN.lon_deg},0.1\n" + "\n".join(lines))
+    try:
+        read_global_path_csv(f)
+    except GlobalPathError:
+        pass
