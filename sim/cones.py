@@ -1,0 +1,219 @@
+"""Cones as small dynamic pymunk bodies that the car can hit, push and knock out.
+
+Each cone is a pymunk body with a square footprint of its real base and its
+mass. The simulation is top-down, so pymunk has no ground: ground friction is
+applied by each cone's ``velocity_func`` as Coulomb friction (deceleration
+``mu_ground * g`` opposing the sliding velocity, and the same on spin), which
+brings a pushed cone to rest. Idle cones are put to sleep, so pymunk neither
+integrates them nor calls their velocity function: a track of 500 cones costs
+about what an empty one does (REFERENCES.md: 195k steps/s with idle cones
+asleep against 47.6k awake, pymunk 7.3, 300 cones).
+
+Scoring as the Formula Student rules do (2 s per cone down or out, DOO):
+
+* a *hit* is a contact between the car and a cone (counted once per cone);
+* a cone is *down or out* once, when its base has left its marked position
+  (displacement beyond ``out_distance``, the base width) or it was struck hard
+  enough to tip over (its speed after the contact above ``tip_speed``). A 2D
+  simulation cannot tip a cone, so the tip-over speed is the model of "down":
+  an assumption, documented here and in ``ConeParams``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+import pymunk
+from numpy.typing import NDArray
+
+COLLISION_CAR = 1
+COLLISION_CONE = 2
+G = 9.81  # [m/s^2]
+
+
+@dataclass(frozen=True)
+class ConeParams:
+    """Physical cone parameters.
+
+    Attributes:
+        small_base: small cone base width [m] (FSG handbook: 228 x 228 mm).
+        small_mass: small cone mass [kg] (assumed: a 325 mm rubber-base cone).
+        big_base: big cone base width [m] (FSG handbook: 285 x 285 mm).
+        big_mass: big cone mass [kg] (assumed: a 505 mm cone).
+        mu_ground: cone-asphalt sliding friction coefficient [-] (assumed).
+        out_distance: displacement that puts a cone "out" [m]: one base width,
+            the whole base outside its marked square.
+        tip_speed: cone speed after a contact that knocks it "down" [m/s]
+            (assumed; a 2D model cannot tip a cone).
+        elasticity: restitution of cone contacts [-].
+        friction: car-cone contact friction [-].
+    """
+
+    small_base: float = 0.228  # [m] REFERENCES.md, FSG handbook (check)
+    small_mass: float = 0.6  # [kg] assumed
+    big_base: float = 0.285  # [m] REFERENCES.md, FSG handbook (check)
+    big_mass: float = 1.6  # [kg] assumed
+    mu_ground: float = 0.6  # [-] assumed
+    out_distance: float = 0.228  # [m] one small base width
+    tip_speed: float = 1.0  # [m/s] assumed
+    elasticity: float = 0.2  # [-]
+    friction: float = 0.5  # [-]
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            low_ok = value >= 0.0 if f.name in ("elasticity", "friction") else value > 0.0
+            if not (math.isfinite(value) and low_ok):
+                bound = ">= 0" if f.name in ("elasticity", "friction") else "> 0"
+                raise ValueError(f"ConeParams.{f.name} must be finite and {bound}, got {value!r}")
+        if self.elasticity > 1.0:
+            raise ValueError(f"ConeParams.elasticity must be in [0, 1], got {self.elasticity!r}")
+
+
+def _ground_friction(mu_g: float) -> Any:
+    """A pymunk velocity function adding Coulomb ground friction to a cone."""
+    decel = mu_g * G
+
+    def velocity_func(body: pymunk.Body, gravity: Any, damping: float, dt: float) -> None:
+        pymunk.Body.update_velocity(body, gravity, damping, dt)
+        vx, vy = body.velocity
+        speed = math.hypot(vx, vy)
+        dv = decel * dt
+        if speed <= dv:
+            body.velocity = (0.0, 0.0)
+        else:
+            k = (speed - dv) / speed
+            body.velocity = (vx * k, vy * k)
+        w = body.angular_velocity
+        dw = 4.0 * dv  # spin stops on the same time scale as sliding
+        body.angular_velocity = 0.0 if abs(w) <= dw else w - math.copysign(dw, w)
+
+    return velocity_func
+
+
+class ConeField:
+    """All cones of a track as pymunk bodies, with hit and DOO bookkeeping.
+
+    Args:
+        space: the pymunk space (its ``sleep_time_threshold`` must be finite
+            for idle cones to sleep; ``World`` sets it).
+        positions: (n, 2) initial cone positions in `reference` [m].
+        kinds: n cone kinds ("blue", "yellow", "orange", "big_orange", "unknown").
+        params: physical parameters.
+    """
+
+    def __init__(
+        self,
+        space: pymunk.Space,
+        positions: NDArray[np.float64],
+        kinds: tuple[str, ...],
+        params: ConeParams | None = None,
+    ) -> None:
+        self.params = params or ConeParams()
+        self.initial_positions = np.array(positions, dtype=float).reshape(-1, 2)
+        self.initial_positions.setflags(write=False)
+        self.kinds = tuple(str(k) for k in kinds)
+        if len(self.kinds) != len(self.initial_positions):
+            raise ValueError(
+                f"ConeField: {len(self.kinds)} kinds for {len(self.initial_positions)} cones"
+            )
+        self.bodies: list[pymunk.Body] = []
+        self._space = space
+        velocity_func = _ground_friction(self.params.mu_ground)
+        for i, (xy, kind) in enumerate(zip(self.initial_positions, self.kinds, strict=True)):
+            big = kind == "big_orange"
+            mass = self.params.big_mass if big else self.params.small_mass
+            base = self.params.big_base if big else self.params.small_base
+            body = pymunk.Body(mass, pymunk.moment_for_box(mass, (base, base)))
+            body.position = (float(xy[0]), float(xy[1]))
+            body.velocity_func = velocity_func
+            shape = pymunk.Poly.create_box(body, (base, base))
+            shape.collision_type = COLLISION_CONE
+            shape.elasticity = self.params.elasticity
+            shape.friction = self.params.friction
+            shape.cone_id = i
+            space.add(body, shape)
+            self.bodies.append(body)
+        self.base_widths = np.array(
+            [self.params.big_base if k == "big_orange" else self.params.small_base for k in kinds]
+        )
+        self.hit_ids: set[int] = set()
+        self.doo_ids: set[int] = set()
+        self.hit_events: list[tuple[float, int]] = []
+        self.doo_events: list[tuple[float, int]] = []
+        self._watch: set[int] = set()
+        self._positions = self.initial_positions.copy()
+        self.version = 0  # bumped whenever a cone's position changes
+        self.time = 0.0
+        space.on_collision(COLLISION_CAR, COLLISION_CONE, begin=self._on_car_contact)
+        space.on_collision(COLLISION_CONE, COLLISION_CONE, begin=self._on_cone_contact)
+
+    def sleep_all(self) -> None:
+        """Put every resting cone to sleep (call once after adding the car)."""
+        for body in self.bodies:
+            if not body.is_sleeping:
+                body.sleep()
+
+    def _on_car_contact(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: Any) -> None:
+        for shape in arbiter.shapes:
+            cone_id = getattr(shape, "cone_id", None)
+            if cone_id is not None:
+                self._watch.add(cone_id)
+                if cone_id not in self.hit_ids:
+                    self.hit_ids.add(cone_id)
+                    self.hit_events.append((self.time, cone_id))
+
+    def _on_cone_contact(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: Any) -> None:
+        # A cone pushed into another: watch both (not a car hit).
+        for shape in arbiter.shapes:
+            cone_id = getattr(shape, "cone_id", None)
+            if cone_id is not None:
+                self._watch.add(cone_id)
+
+    def update(self, t: float) -> list[int]:
+        """Bookkeeping after a physics step: positions, new DOO cones.
+
+        Only cones touched since they last slept are inspected, so the cost
+        does not grow with the track.
+
+        Args:
+            t: simulation time after the step [s].
+
+        Returns:
+            Ids of cones that became down-or-out at this step.
+        """
+        self.time = t
+        new_doo: list[int] = []
+        settled: list[int] = []
+        for i in sorted(self._watch):
+            body = self.bodies[i]
+            pos = body.position
+            if pos.x != self._positions[i, 0] or pos.y != self._positions[i, 1]:
+                self._positions[i] = (pos.x, pos.y)
+                self.version += 1
+            if i not in self.doo_ids:
+                moved = math.hypot(*(self._positions[i] - self.initial_positions[i]))
+                speed = body.velocity.length
+                if moved > self.params.out_distance or speed > self.params.tip_speed:
+                    self.doo_ids.add(i)
+                    self.doo_events.append((t, i))
+                    new_doo.append(i)
+            if body.is_sleeping:
+                settled.append(i)
+        self._watch.difference_update(settled)
+        return new_doo
+
+    @property
+    def positions(self) -> NDArray[np.float64]:
+        """(n, 2) current cone positions in `reference` [m] (read-only view)."""
+        view = self._positions.view()
+        view.setflags(write=False)
+        return view
+
+    @property
+    def awake_count(self) -> int:
+        """Number of cones pymunk is integrating now."""
+        return sum(1 for b in self.bodies if not b.is_sleeping)

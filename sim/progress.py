@@ -1,0 +1,110 @@
+"""Arc-length progress and lateral offset of a point along a polyline.
+
+The projection is searched in a window of segments around the previous
+answer, so a figure-of-eight (skidpad) or a hairpin whose legs lie close
+together never makes the car jump to the other leg. The first query (or one
+after a reset) searches globally with a ``cKDTree``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+
+@dataclass(frozen=True, slots=True)
+class Projection:
+    """Where a point lies relative to the polyline.
+
+    Attributes:
+        s: arc length of the foot point from the polyline's start [m].
+        lateral: signed distance, left of the driving direction positive [m].
+        index: segment index of the foot point.
+        tangent: (2,) unit tangent of that segment.
+    """
+
+    s: float
+    lateral: float
+    index: int
+    tangent: tuple[float, float]
+
+
+class PolylineProgress:
+    """Project points onto a polyline, tracking the segment between calls.
+
+    Args:
+        points: (m, 2) polyline vertices in driving order [m].
+        closed: whether the last vertex joins the first.
+        window_m: half-width of the search window around the last segment [m].
+    """
+
+    def __init__(self, points: NDArray[np.float64], closed: bool, window_m: float = 15.0) -> None:
+        pts = np.asarray(points, dtype=float).reshape(-1, 2)
+        if len(pts) < 2:
+            raise ValueError("PolylineProgress needs at least 2 points")
+        self.closed = closed
+        ring = np.vstack([pts, pts[:1]]) if closed else pts
+        self._starts = ring[:-1]
+        self._deltas = np.diff(ring, axis=0)
+        self._lengths = np.hypot(self._deltas[:, 0], self._deltas[:, 1])
+        if np.any(self._lengths <= 0.0):
+            raise ValueError("PolylineProgress: repeated consecutive points")
+        self._tangents = self._deltas / self._lengths[:, None]
+        self._s0 = np.concatenate([[0.0], np.cumsum(self._lengths)[:-1]])
+        self.length = float(self._lengths.sum())
+        step = float(np.median(self._lengths))
+        self._window = max(2, math.ceil(window_m / step))
+        self._tree = cKDTree(pts)
+        self._last: int | None = None
+
+    def reset(self) -> None:
+        """Forget the last segment: the next query searches globally."""
+        self._last = None
+
+    def project(self, xy: NDArray[np.float64] | tuple[float, float]) -> Projection:
+        """Project one point [m]."""
+        p = np.asarray(xy, dtype=float)
+        n = len(self._starts)
+        if self._last is None:
+            _, nearest = self._tree.query(p)
+            center = int(nearest)
+        else:
+            center = self._last
+        idx = np.arange(center - self._window, center + self._window + 1)
+        idx = np.mod(idx, n) if self.closed else idx[(idx >= 0) & (idx < n)]
+        rel = p - self._starts[idx]
+        u = np.clip(np.einsum("ij,ij->i", rel, self._tangents[idx]), 0.0, self._lengths[idx])
+        foot = self._starts[idx] + self._tangents[idx] * u[:, None]
+        d2 = np.sum((p - foot) ** 2, axis=1)
+        k = int(np.argmin(d2))
+        seg = int(idx[k])
+        self._last = seg
+        t = self._tangents[seg]
+        r = p - foot[k]
+        lateral = float(t[0] * r[1] - t[1] * r[0])
+        return Projection(float(self._s0[seg] + u[k]), lateral, seg, (float(t[0]), float(t[1])))
+
+
+def segment_crossing(
+    p0: NDArray[np.float64], p1: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64]
+) -> float | None:
+    """Where the step p0 -> p1 crosses the line segment a-b.
+
+    Returns:
+        The fraction u in [0, 1] along p0 -> p1 at the crossing, or None.
+    """
+    d = p1 - p0
+    e = b - a
+    denom = d[0] * e[1] - d[1] * e[0]
+    if denom == 0.0:
+        return None
+    w = a - p0
+    u = (w[0] * e[1] - w[1] * e[0]) / denom
+    v = (w[0] * d[1] - w[1] * d[0]) / denom
+    if 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0:
+        return float(u)
+    return None

@@ -1,0 +1,209 @@
+"""Race control: lap timing, track limits and the stuck detector.
+
+* Laps: the start/finish line is the segment between the big orange cones. A
+  lap counts when the car's reference point crosses it in the driving
+  direction after net progress along the centreline of at least
+  ``min_lap_fraction`` of a lap since the last crossing (a progress guard: rocking
+  back and forth over the line adds no net progress, so it never counts). The
+  crossing time is interpolated linearly within the physics step. The first
+  forward crossing starts the clock (a standing start behind the line, as in
+  FS trackdrive); a car placed on or past the line starts the clock at t = 0.
+* Off-track: the car is off track when its whole body (all four footprint
+  corners) lies outside the boundaries on one side (FS: "off course" when all
+  four wheels leave the track). Each excursion is an event with start and end
+  time.
+* Stuck: less than ``stuck_progress_m`` of net progress in ``stuck_time_s``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from localization.pose import Pose2D
+from sim.progress import PolylineProgress, segment_crossing
+
+
+@dataclass(frozen=True)
+class RaceRules:
+    """Race-control settings.
+
+    Attributes:
+        min_lap_fraction: net progress needed between two counted crossings,
+            as a fraction of the lap length [-].
+        stuck_time_s: window of the stuck detector [s].
+        stuck_progress_m: net progress below which the car is stuck [m].
+    """
+
+    min_lap_fraction: float = 0.75
+    stuck_time_s: float = 5.0
+    stuck_progress_m: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.min_lap_fraction <= 1.0:
+            raise ValueError(
+                f"RaceRules.min_lap_fraction must be in (0, 1], got {self.min_lap_fraction!r}"
+            )
+        if not self.stuck_time_s > 0.0:
+            raise ValueError(f"RaceRules.stuck_time_s must be > 0, got {self.stuck_time_s!r}")
+        if not self.stuck_progress_m >= 0.0:
+            raise ValueError(
+                f"RaceRules.stuck_progress_m must be >= 0, got {self.stuck_progress_m!r}"
+            )
+
+
+@dataclass
+class OffTrackEvent:
+    """One excursion off the track [s]; ``end`` is None while it lasts."""
+
+    start: float
+    end: float | None = None
+
+
+@dataclass
+class RaceState:
+    """What race control has recorded so far."""
+
+    clock_start: float | None = None
+    lap_times: list[float] = field(default_factory=list)
+    crossing_times: list[float] = field(default_factory=list)
+    off_track: list[OffTrackEvent] = field(default_factory=list)
+    progress_m: float = 0.0
+    stuck: bool = False
+
+    @property
+    def laps_completed(self) -> int:
+        """Number of counted laps."""
+        return len(self.lap_times)
+
+    @property
+    def is_off_track(self) -> bool:
+        """Whether an excursion is under way."""
+        return bool(self.off_track) and self.off_track[-1].end is None
+
+
+class RaceControl:
+    """Lap timing, off-track and stuck detection against a track's geometry.
+
+    Args:
+        centreline: (m, 2) true centreline in driving order [m].
+        closed: whether the centreline is a loop.
+        half_widths: (m,) half track width at each centreline point [m].
+        start_finish: (2, 2) end points of the timing line [m].
+        lap_length: distance of one lap along the centreline [m].
+        car_length: footprint length [m].
+        car_width: footprint width [m].
+        rules: settings.
+    """
+
+    def __init__(
+        self,
+        centreline: NDArray[np.float64],
+        closed: bool,
+        *,
+        half_widths: NDArray[np.float64],
+        start_finish: NDArray[np.float64],
+        lap_length: float,
+        car_length: float,
+        car_width: float,
+        rules: RaceRules | None = None,
+    ) -> None:
+        self.rules = rules or RaceRules()
+        self.progress = PolylineProgress(centreline, closed)
+        self.half_widths = np.asarray(half_widths, dtype=float)
+        self.line = np.asarray(start_finish, dtype=float).reshape(2, 2)
+        self.lap_length = float(lap_length)
+        hl, hw = 0.5 * car_length, 0.5 * car_width
+        self._corners = np.array([[hl, hw], [hl, -hw], [-hl, hw], [-hl, -hw]])
+        self.state = RaceState()
+        self._s_last: float | None = None
+        self._progress_at_crossing = 0.0
+        self._history: deque[tuple[float, float]] = deque()
+
+    def start(self, t: float, pose: Pose2D) -> None:
+        """Initialise at the start pose; starts the clock if already past the line."""
+        proj = self.progress.project(pose.xy)
+        self._s_last = proj.s
+        self._history = deque([(t, 0.0)])
+        line_mid = self.line.mean(axis=0)
+        line_dir = self.line[1] - self.line[0]
+        normal = np.array([-line_dir[1], line_dir[0]])
+        if np.dot(normal, proj.tangent) < 0:
+            normal = -normal
+        ahead = float(np.dot(pose.xy - line_mid, normal)) / float(np.linalg.norm(normal))
+        if 0.0 <= ahead <= 0.5:
+            self.state.clock_start = t
+            self.state.crossing_times.append(t)
+
+    def update(self, t_prev: float, t: float, pose_prev: Pose2D, pose: Pose2D) -> None:
+        """Account for one physics step from ``pose_prev`` at ``t_prev`` to ``pose`` at ``t``."""
+        proj = self.progress.project(pose.xy)
+        self._advance_progress(proj.s)
+        self._check_crossing(t_prev, t, pose_prev, pose, proj.tangent)
+        self._check_off_track(t, pose, proj.lateral, proj.index, proj.tangent)
+        self._check_stuck(t)
+
+    def _advance_progress(self, s: float) -> None:
+        assert self._s_last is not None, "RaceControl.start() must be called first"
+        ds = s - self._s_last
+        if self.progress.closed:
+            half = 0.5 * self.progress.length
+            ds = (ds + half) % self.progress.length - half
+        self.state.progress_m += ds
+        self._s_last = s
+
+    def _check_crossing(
+        self,
+        t_prev: float,
+        t: float,
+        pose_prev: Pose2D,
+        pose: Pose2D,
+        tangent: tuple[float, float],
+    ) -> None:
+        p0, p1 = pose_prev.xy, pose.xy
+        u = segment_crossing(p0, p1, self.line[0], self.line[1])
+        if u is None or float(np.dot(p1 - p0, tangent)) <= 0.0:
+            return
+        t_cross = t_prev + u * (t - t_prev)
+        st = self.state
+        if st.clock_start is None:
+            st.clock_start = t_cross
+            st.crossing_times.append(t_cross)
+            self._progress_at_crossing = st.progress_m
+            return
+        needed = self.rules.min_lap_fraction * self.lap_length
+        if st.progress_m - self._progress_at_crossing >= needed:
+            st.lap_times.append(t_cross - st.crossing_times[-1])
+            st.crossing_times.append(t_cross)
+            self._progress_at_crossing = st.progress_m
+
+    def _check_off_track(
+        self, t: float, pose: Pose2D, lateral: float, index: int, tangent: tuple[float, float]
+    ) -> None:
+        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+        # Lateral offset of each footprint corner: the car's own lateral offset
+        # plus the corner's offset projected on the track's left normal.
+        nx, ny = -tangent[1], tangent[0]
+        corner_world = self._corners @ np.array([[c, s], [-s, c]])
+        corner_lat = lateral + corner_world @ np.array([nx, ny])
+        half = self.half_widths[min(index, len(self.half_widths) - 1)]
+        off = bool(np.all(corner_lat > half) or np.all(corner_lat < -half))
+        st = self.state
+        if off and not st.is_off_track:
+            st.off_track.append(OffTrackEvent(start=t))
+        elif not off and st.is_off_track:
+            st.off_track[-1].end = t
+
+    def _check_stuck(self, t: float) -> None:
+        self._history.append((t, self.state.progress_m))
+        horizon = t - self.rules.stuck_time_s
+        while len(self._history) > 1 and self._history[1][0] <= horizon:
+            self._history.popleft()
+        t0, p0 = self._history[0]
+        self.state.stuck = (
+            t0 <= horizon and abs(self.state.progress_m - p0) < self.rules.stuck_progress_m
+        )

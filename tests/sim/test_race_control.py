@@ -1,0 +1,128 @@
+"""Tests for sim.race_control and sim.progress on a circular track."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from localization.pose import Pose2D
+from sim.progress import PolylineProgress, segment_crossing
+from sim.race_control import RaceControl, RaceRules
+
+R = 20.0  # [m] centreline radius
+N = 400
+
+
+def circle_control(**rules: float) -> RaceControl:
+    """A counter-clockwise circle, 4 m wide, timing line across it at angle 0."""
+    t = np.linspace(0.0, 2 * math.pi, N, endpoint=False)
+    centre = np.column_stack([R * np.cos(t), R * np.sin(t)])
+    lap = N * 2 * R * math.sin(math.pi / N)
+    return RaceControl(
+        centre,
+        True,
+        half_widths=np.full(N, 2.0),
+        start_finish=np.array([[R - 2.0, 0.0], [R + 2.0, 0.0]]),
+        lap_length=lap,
+        car_length=2.9,
+        car_width=1.4,
+        rules=RaceRules(**rules),
+    )
+
+
+def pose_on_circle(angle: float, radius: float = R) -> Pose2D:
+    """Pose on a CCW circle at polar ``angle``, heading along it."""
+    return Pose2D(radius * math.cos(angle), radius * math.sin(angle), angle + math.pi / 2)
+
+
+def drive(rc: RaceControl, angles: np.ndarray, dt: float, radius: float = R) -> None:
+    """Feed race control a pose per step."""
+    prev = pose_on_circle(angles[0], radius)
+    rc.start(0.0, prev)
+    for k, a in enumerate(angles[1:], start=1):
+        pose = pose_on_circle(a, radius)
+        rc.update((k - 1) * dt, k * dt, prev, pose)
+        prev = pose
+
+
+def test_lap_times_at_constant_speed() -> None:
+    """At 10 m/s the lap time is 2 pi R / v = 12.566 s, interpolated within the step."""
+    rc = circle_control()
+    v, dt = 10.0, 1 / 200
+    omega = v / R
+    start = -0.1  # 2 m behind the line
+    angles = start + omega * dt * np.arange(int(3 * 2 * math.pi / omega / dt))
+    drive(rc, angles, dt)
+    st = rc.state
+    assert st.laps_completed == 2
+    # The polygon's chords are slightly shorter than the arc; the time is exact.
+    assert_allclose(st.lap_times, [2 * math.pi * R / v] * 2, rtol=1e-9)
+    assert_allclose(st.clock_start, 0.1 / omega, rtol=1e-6)
+    assert not st.off_track and not st.stuck
+
+
+def test_rocking_over_the_line_never_counts() -> None:
+    """Back and forth across the line 50 times: no lap."""
+    rc = circle_control()
+    angles = 0.05 * np.sin(np.linspace(0, 50 * 2 * math.pi, 5000))
+    drive(rc, angles, 1 / 200)
+    assert rc.state.laps_completed == 0
+    assert abs(rc.state.progress_m) < 1.1
+
+
+def test_off_track_event_has_start_and_end() -> None:
+    """Driving a circle of radius 24 m (body fully outside a 22 m edge) is an excursion."""
+    rc = circle_control()
+    dt = 1 / 200
+    angles = np.linspace(0.5, 1.0, 50)
+    prev = pose_on_circle(angles[0])
+    rc.start(0.0, prev)
+    radii = [R] * 10 + [R + 4.0] * 20 + [R] * 20
+    for k, (a, r) in enumerate(zip(angles[1:], radii[1:], strict=True), start=1):
+        pose = pose_on_circle(a, r)
+        rc.update((k - 1) * dt, k * dt, prev, pose)
+        prev = pose
+    events = rc.state.off_track
+    assert len(events) == 1
+    assert_allclose([events[0].start, events[0].end], [10 * dt, 30 * dt])
+
+
+def test_stuck_after_no_progress() -> None:
+    """Standing still for longer than stuck_time_s sets stuck."""
+    rc = circle_control(stuck_time_s=2.0)
+    pose = pose_on_circle(1.0)
+    rc.start(0.0, pose)
+    dt = 0.1
+    for k in range(1, 30):
+        rc.update((k - 1) * dt, k * dt, pose, pose)
+        assert rc.state.stuck == (k * dt >= 2.0 - 1e-9)
+
+
+def test_projection_window_follows_a_figure_eight() -> None:
+    """On a figure eight the projection stays on the branch being driven."""
+    t = np.linspace(0, 2 * math.pi, 400, endpoint=False)
+    eight = np.column_stack([10 * np.sin(t), 10 * np.sin(t) * np.cos(t)])
+    prog = PolylineProgress(eight, closed=True, window_m=5.0)
+    s_values = [prog.project(p).s for p in eight[3::5]]  # start off the crossing
+    assert np.all(np.diff(s_values) > 0)
+
+
+def test_segment_crossing_fraction() -> None:
+    """A step from (0,-1) to (0,3) crosses the x axis a quarter of the way."""
+    u = segment_crossing(
+        np.array([0.0, -1.0]), np.array([0.0, 3.0]), np.array([-1.0, 0.0]), np.array([1.0, 0.0])
+    )
+    assert u == pytest.approx(0.25)
+    assert (
+        segment_crossing(np.zeros(2), np.ones(2), np.array([5.0, 0.0]), np.array([6.0, 0.0]))
+        is None
+    )
+
+
+def test_bad_rules_rejected() -> None:
+    """Out-of-range rules name the field."""
+    with pytest.raises(ValueError, match="min_lap_fraction"):
+        RaceRules(min_lap_fraction=0.0)
