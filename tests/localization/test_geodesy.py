@@ -47,7 +47,7 @@ def test_projection_matches_seed_formula_to_1e9_m() -> None:
     expected = np.array(
         [
             seed_formula(a, b, DEFAULT_ORIGIN.lat_deg, DEFAULT_ORIGIN.lon_deg)
-            for a, b in zip(lat, lon)
+            for a, b in zip(lat, lon, strict=True)
         ]
     )
     assert_allclose(x, expected[:, 0], rtol=0, atol=1e-9)
