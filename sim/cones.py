@@ -29,7 +29,9 @@ import numpy as np
 import pymunk
 from numpy.typing import NDArray
 
-COLLISION_CAR = 1
+from sim.vehicle import VEHICLE_COLLISION_TYPE
+
+COLLISION_CAR = VEHICLE_COLLISION_TYPE
 COLLISION_CONE = 2
 G = 9.81  # [m/s^2]
 
