@@ -1,0 +1,51 @@
+"""Sensor models of the simulated car, their profiles and the scheduler.
+
+``SensorSuite(profile, seed, origin).step(truth)`` is the entry point: called
+once per physics step with a ``TruthSample``, it returns the messages
+(``localization.messages``) delivered at that step. Profiles ("ideal", "rtk"
+(default), "consumer", "consumer_white") are frozen dataclass trees in
+``profiles.py``; each sensor's noise model is in its own module's docstring.
+"""
+
+from __future__ import annotations
+
+from sim.sensors.cone_detector import ConeDetector, ConeDetectorConfig
+from sim.sensors.cone_map import ConeMap
+from sim.sensors.gps import GpsConfig, GpsReceiver
+from sim.sensors.heading import HeadingConfig, HeadingSensor
+from sim.sensors.imu import ImuConfig, ImuSensor
+from sim.sensors.profiles import (
+    DEFAULT_PROFILE,
+    PROFILES,
+    SensorProfile,
+    get_profile,
+    override,
+)
+from sim.sensors.suite import SENSOR_ORDER, SensorSuite
+from sim.sensors.timing import CaptureClock, SensorTiming
+from sim.sensors.truth import TruthSample
+from sim.sensors.wheel_speed import WheelSpeedConfig, WheelSpeedSensor
+
+__all__ = [
+    "DEFAULT_PROFILE",
+    "PROFILES",
+    "SENSOR_ORDER",
+    "CaptureClock",
+    "ConeDetector",
+    "ConeDetectorConfig",
+    "ConeMap",
+    "GpsConfig",
+    "GpsReceiver",
+    "HeadingConfig",
+    "HeadingSensor",
+    "ImuConfig",
+    "ImuSensor",
+    "SensorProfile",
+    "SensorSuite",
+    "SensorTiming",
+    "TruthSample",
+    "WheelSpeedConfig",
+    "WheelSpeedSensor",
+    "get_profile",
+    "override",
+]

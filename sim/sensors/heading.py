@@ -1,0 +1,78 @@
+"""Heading sensor: ``/global_yaw`` as a dual-antenna GNSS gives it.
+
+Measurement at capture k, in ``reference`` [rad]::
+
+    yaw_m[k] = wrap(yaw[k] + b[k] + sigma_w * v[k])      v ~ N(0, 1)
+
+with an optional first-order Gauss-Markov bias b (``noise.GaussMarkov``,
+stationary std ``bias_sigma``, correlation time ``bias_tau``), wrapped into
+[-pi, pi). The stated variance is the stationary total sigma_w^2 + sigma_b^2.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from localization.messages import FRAME_REFERENCE, Header, HeadingStamped
+from localization.pose import wrap_angle
+from sim.sensors.noise import GaussMarkov
+from sim.sensors.streams import stream
+from sim.sensors.timing import SensorTiming
+from sim.sensors.truth import TruthSample
+from sim.sensors.validation import check_non_negative, check_positive
+
+
+@dataclass(frozen=True)
+class HeadingConfig(SensorTiming):
+    """Heading sensor settings.
+
+    Attributes:
+        white_sigma: white noise std [rad].
+        bias_sigma: stationary std of the Gauss-Markov bias [rad].
+        bias_tau: correlation time of the bias [s], > 0.
+    """
+
+    rate: float = 20.0  # [Hz]
+    latency: float = 0.05  # [s]
+    white_sigma: float = math.radians(0.25)  # [rad]
+    bias_sigma: float = 0.0  # [rad]
+    bias_tau: float = 60.0  # [s]
+
+    def _validate(self) -> None:
+        check_non_negative("HeadingConfig", "white_sigma", self.white_sigma, "[rad]")
+        check_non_negative("HeadingConfig", "bias_sigma", self.bias_sigma, "[rad]")
+        check_positive("HeadingConfig", "bias_tau", self.bias_tau, "[s]")
+
+
+class HeadingSensor:
+    """Simulated dual-antenna heading publishing ``HeadingStamped`` in ``reference``.
+
+    Args:
+        config: the sensor's settings.
+        seed: episode seed (streams "heading/white", "heading/bias").
+    """
+
+    name = "heading"
+
+    def __init__(self, config: HeadingConfig, seed: int) -> None:
+        self.config = config
+        self.reset(seed)
+
+    def reset(self, seed: int) -> None:
+        """Restart the noise streams and the bias from ``seed``."""
+        self._white = stream(seed, self.name, "white")
+        self._bias = GaussMarkov(
+            self.config.bias_sigma, self.config.bias_tau, stream(seed, self.name, "bias")
+        )
+        self._last_t: float | None = None
+
+    def capture(self, truth: TruthSample) -> HeadingStamped:
+        """The heading of a capture at ``truth.t``."""
+        cfg = self.config
+        bias = self._bias.value if self._last_t is None else self._bias.step(truth.t - self._last_t)
+        self._last_t = truth.t
+        noise = float(bias[0]) + cfg.white_sigma * float(self._white.standard_normal())
+        yaw = float(wrap_angle(truth.antenna_pose.yaw + noise))
+        variance = cfg.white_sigma**2 + cfg.bias_sigma**2
+        return HeadingStamped(Header(truth.t, FRAME_REFERENCE), yaw, variance)

@@ -1,0 +1,124 @@
+"""Planar IMU: yaw rate and longitudinal/lateral specific force in ``gps_antenna``.
+
+Measurement at capture k, for each channel (gyro z, accel x, accel y)::
+
+    m[k] = true[k] + b[k] + sigma_d * v[k],   sigma_d = N / sqrt(dt_s),  v ~ N(0, 1)
+    b[k+1] = b[k] + K * sqrt(dt) * w[k],      b[0] = 0 (calibrated at start)
+
+with N the white-noise density (gyro angle random walk, accelerometer velocity
+random walk), dt_s = 1 / rate the sample period, and K the bias random-walk
+density (``noise.BiasRandomWalk``; dt = time between captures). The message
+states the white-noise variance sigma_d^2 (a driver knows its noise density,
+not its current bias).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from localization.messages import FRAME_GPS_ANTENNA, Header, Imu
+from sim.sensors.noise import BiasRandomWalk, white_sigma
+from sim.sensors.streams import stream
+from sim.sensors.timing import SensorTiming
+from sim.sensors.truth import TruthSample
+from sim.sensors.validation import check_non_negative
+
+STANDARD_GRAVITY = 9.80665  # [m/s^2]
+
+# Datasheet figures (REFERENCES.md "Sensors"), converted to SI.
+# ADIS16448: gyro 0.0135 deg/s/sqrt(Hz); accelerometer 0.23 mg/sqrt(Hz).
+ADIS16448_GYRO_DENSITY = math.radians(0.0135)  # [rad/s/sqrt(Hz)]
+ADIS16448_ACCEL_DENSITY = 0.23e-3 * STANDARD_GRAVITY  # [m/s^2/sqrt(Hz)]
+# MPU-6000 as AirSim models it (ImuSimpleParams.hpp): gyro ARW 0.30 deg/sqrt(h),
+# i.e. 0.30 / 60 deg/sqrt(s); accelerometer 0.24 mg/sqrt(Hz).
+MPU6000_GYRO_DENSITY = math.radians(0.30 / 60.0)  # [rad/s/sqrt(Hz)] = [rad/sqrt(s)]
+MPU6000_ACCEL_DENSITY = 0.24e-3 * STANDARD_GRAVITY  # [m/s^2/sqrt(Hz)]
+# Bias random walk K = bias instability / sqrt(tau), as AirSim's ImuSimple.hpp:
+# gyro 4.6 deg/h with tau 500 s; accelerometer 36 ug with tau 800 s.
+MPU6000_GYRO_BIAS_WALK = math.radians(4.6 / 3600.0) / math.sqrt(500.0)  # [rad/s/sqrt(s)]
+MPU6000_ACCEL_BIAS_WALK = 36e-6 * STANDARD_GRAVITY / math.sqrt(800.0)  # [m/s^2/sqrt(s)]
+
+
+@dataclass(frozen=True)
+class ImuConfig(SensorTiming):
+    """IMU settings (defaults: ADIS16448 white noise, REFERENCES.md "Sensors").
+
+    Attributes:
+        gyro_noise_density: gyro white-noise density [rad/s/sqrt(Hz)].
+        accel_noise_density: accelerometer white-noise density [m/s^2/sqrt(Hz)].
+        gyro_bias_walk: gyro bias random-walk density [rad/s/sqrt(s)].
+        accel_bias_walk: accelerometer bias random-walk density [m/s^2/sqrt(s)].
+    """
+
+    rate: float = 100.0  # [Hz]
+    latency: float = 0.0  # [s]
+    gyro_noise_density: float = ADIS16448_GYRO_DENSITY  # [rad/s/sqrt(Hz)]
+    accel_noise_density: float = ADIS16448_ACCEL_DENSITY  # [m/s^2/sqrt(Hz)]
+    gyro_bias_walk: float = 0.0  # [rad/s/sqrt(s)]
+    accel_bias_walk: float = 0.0  # [m/s^2/sqrt(s)]
+
+    def _validate(self) -> None:
+        owner = "ImuConfig"
+        check_non_negative(owner, "gyro_noise_density", self.gyro_noise_density, "[rad/s/sqrt(Hz)]")
+        check_non_negative(
+            owner, "accel_noise_density", self.accel_noise_density, "[m/s^2/sqrt(Hz)]"
+        )
+        check_non_negative(owner, "gyro_bias_walk", self.gyro_bias_walk, "[rad/s/sqrt(s)]")
+        check_non_negative(owner, "accel_bias_walk", self.accel_bias_walk, "[m/s^2/sqrt(s)]")
+
+    @property
+    def gyro_sigma(self) -> float:
+        """Discrete gyro white-noise std at this rate [rad/s]."""
+        return white_sigma(self.gyro_noise_density, self.period)
+
+    @property
+    def accel_sigma(self) -> float:
+        """Discrete accelerometer white-noise std at this rate [m/s^2]."""
+        return white_sigma(self.accel_noise_density, self.period)
+
+
+class ImuSensor:
+    """Simulated planar IMU publishing ``Imu`` in ``gps_antenna``.
+
+    Args:
+        config: the IMU's settings.
+        seed: episode seed (streams "imu/gyro_white", "imu/accel_white",
+            "imu/gyro_bias", "imu/accel_bias").
+    """
+
+    name = "imu"
+
+    def __init__(self, config: ImuConfig, seed: int) -> None:
+        self.config = config
+        self.reset(seed)
+
+    def reset(self, seed: int) -> None:
+        """Restart the noise streams and zero the biases."""
+        cfg = self.config
+        self._gyro_white = stream(seed, self.name, "gyro_white")
+        self._accel_white = stream(seed, self.name, "accel_white")
+        self._gyro_bias = BiasRandomWalk(cfg.gyro_bias_walk, stream(seed, self.name, "gyro_bias"))
+        self._accel_bias = BiasRandomWalk(
+            cfg.accel_bias_walk, stream(seed, self.name, "accel_bias"), dim=2
+        )
+        self._last_t: float | None = None
+
+    def capture(self, truth: TruthSample) -> Imu:
+        """The IMU sample of a capture at ``truth.t``."""
+        cfg = self.config
+        dt = 0.0 if self._last_t is None else truth.t - self._last_t
+        self._last_t = truth.t
+        bg = float(self._gyro_bias.step(dt)[0])
+        ba = self._accel_bias.step(dt)
+        sg, sa = cfg.gyro_sigma, cfg.accel_sigma
+        wg = float(self._gyro_white.standard_normal())
+        wa = self._accel_white.standard_normal(2)
+        return Imu(
+            header=Header(truth.t, FRAME_GPS_ANTENNA),
+            yaw_rate=truth.yaw_rate + bg + sg * wg,
+            accel_x=truth.accel_x + float(ba[0]) + sa * float(wa[0]),
+            accel_y=truth.accel_y + float(ba[1]) + sa * float(wa[1]),
+            yaw_rate_variance=sg * sg,
+            accel_variance=sa * sa,
+        )

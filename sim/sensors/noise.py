@@ -1,0 +1,103 @@
+"""Noise processes of the sensor models, each a few lines and written by hand.
+
+They are three textbook recursions (Kalibr's IMU noise model; Maybeck,
+*Stochastic Models, Estimation and Control*, vol. 1, ch. 4), short enough that a
+dependency would cost more than it saves:
+
+* Discrete white noise from a continuous noise density ``N`` (e.g. a gyro's
+  angle random walk, [rad/s/sqrt(Hz)] = [rad/sqrt(s)]) sampled every ``dt``::
+
+      sigma_d = N / sqrt(dt)
+
+* First-order Gauss-Markov bias with stationary std ``sigma`` and correlation
+  time ``tau``, discretised exactly for any step ``dt``::
+
+      phi     = exp(-dt / tau)
+      b[k+1]  = phi * b[k] + sigma * sqrt(1 - phi^2) * w[k],   w ~ N(0, 1)
+
+  started from its stationary law b[0] ~ N(0, sigma^2), so
+  Var(b[k]) = sigma^2 and Corr(b[k], b[k+1]) = phi at every k.
+
+* Bias random walk with density ``K`` [unit/sqrt(s)]::
+
+      b[k+1] = b[k] + K * sqrt(dt) * w[k],   so Var(b[k] - b[0]) = K^2 * t
+
+  AirSim's IMU model (``ImuSimple.hpp``) drives it with
+  ``K = bias_instability / sqrt(tau)``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sim.sensors.validation import check_non_negative, check_positive
+
+
+def white_sigma(density: float, dt: float) -> float:
+    """Std of discrete white noise sampled every ``dt`` from a noise density.
+
+    Args:
+        density: noise density [unit/sqrt(Hz)] (= [unit*sqrt(s)]).
+        dt: sample period [s].
+
+    Returns:
+        sigma_d = density / sqrt(dt) [unit].
+
+    >>> round(white_sigma(0.01, 0.01), 12)
+    0.1
+    """
+    check_positive("white_sigma", "dt", dt, "[s]")
+    return density / math.sqrt(dt)
+
+
+class GaussMarkov:
+    """First-order Gauss-Markov process, exactly discretised (see module docstring).
+
+    Args:
+        sigma: stationary std [unit], >= 0.
+        tau: correlation time [s], > 0.
+        rng: the generator of this process's own stream.
+        dim: number of independent components (e.g. 2 for east/north).
+    """
+
+    def __init__(self, sigma: float, tau: float, rng: np.random.Generator, dim: int = 1) -> None:
+        check_non_negative("GaussMarkov", "sigma", sigma)
+        check_positive("GaussMarkov", "tau", tau, "[s]")
+        self.sigma = sigma
+        self.tau = tau
+        self._rng = rng
+        self.value: NDArray[np.float64] = sigma * rng.standard_normal(dim)
+
+    def step(self, dt: float) -> NDArray[np.float64]:
+        """Advance by ``dt`` [s] (>= 0) and return the new value, shape (dim,)."""
+        check_non_negative("GaussMarkov.step", "dt", dt, "[s]")
+        phi = math.exp(-dt / self.tau)
+        w = self._rng.standard_normal(self.value.shape)
+        self.value = phi * self.value + self.sigma * math.sqrt(1.0 - phi * phi) * w
+        return self.value
+
+
+class BiasRandomWalk:
+    """Random-walk bias ``b += K sqrt(dt) w`` starting at zero (a calibrated sensor).
+
+    Args:
+        density: random-walk density K [unit/sqrt(s)], >= 0.
+        rng: the generator of this process's own stream.
+        dim: number of independent components.
+    """
+
+    def __init__(self, density: float, rng: np.random.Generator, dim: int = 1) -> None:
+        check_non_negative("BiasRandomWalk", "density", density)
+        self.density = density
+        self._rng = rng
+        self.value: NDArray[np.float64] = np.zeros(dim)
+
+    def step(self, dt: float) -> NDArray[np.float64]:
+        """Advance by ``dt`` [s] (>= 0) and return the new value, shape (dim,)."""
+        check_non_negative("BiasRandomWalk.step", "dt", dt, "[s]")
+        w = self._rng.standard_normal(self.value.shape)
+        self.value = self.value + self.density * math.sqrt(dt) * w
+        return self.value

@@ -1,0 +1,162 @@
+"""The sensor scheduler: every sensor of the car, captured and delivered on time.
+
+``SensorSuite.step(truth)`` is called once per physics step with the current
+truth. For each sensor, in the fixed order ``SENSOR_ORDER``, it asks the
+sensor's ``CaptureClock`` whether a capture is due (quantisation: see
+``timing.py``), captures, and queues the message for delivery at
+stamp + latency. It returns every queued message whose delivery time has come
+(t >= stamp + latency, within ``TIME_EPS``), sorted by (stamp, sensor order).
+
+A disabled sensor captures nothing, but its clock keeps running so that it
+resumes on its grid, and messages already in flight are still delivered.
+``reset(seed)`` restarts streams, biases, clocks and queues; the settings
+(including faults and enable flags set on the suite) are kept. Only the enable
+flags and the GPS faults change on a running suite; any other setting (a rate,
+a noise figure) takes a new suite, built from a profile changed with
+``override``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections import deque
+from typing import Protocol
+
+from localization.geodesy import DEFAULT_ORIGIN, ReferenceOrigin
+from localization.messages import Message
+from sim.sensors.cone_detector import ConeDetector
+from sim.sensors.gps import GpsReceiver
+from sim.sensors.heading import HeadingSensor
+from sim.sensors.imu import ImuSensor
+from sim.sensors.profiles import DEFAULT_PROFILE, SECTIONS, SensorProfile, get_profile
+from sim.sensors.timing import TIME_EPS, CaptureClock, SensorTiming
+from sim.sensors.truth import TruthSample
+from sim.sensors.validation import check_non_negative, check_positive, check_probability
+from sim.sensors.wheel_speed import WheelSpeedSensor
+
+SENSOR_ORDER = SECTIONS  # ("gps", "heading", "imu", "wheel_speed", "cones")
+
+
+class Sensor(Protocol):
+    """What the suite needs of a sensor model."""
+
+    name: str
+
+    @property
+    def config(self) -> SensorTiming: ...
+
+    def reset(self, seed: int) -> None: ...
+
+    def capture(self, truth: TruthSample) -> Message | None: ...
+
+
+class SensorSuite:
+    """All sensors of one car, with their clocks and delivery queues.
+
+    Args:
+        profile: a ``SensorProfile`` or the name of one (default "rtk").
+        seed: episode seed, a non-negative integer.
+        origin: geodetic origin of ``reference`` (for the GPS fixes).
+
+    Attributes:
+        gps, heading, imu, wheel_speed, cones: the sensor models.
+    """
+
+    def __init__(
+        self,
+        profile: SensorProfile | str = DEFAULT_PROFILE,
+        seed: int = 0,
+        origin: ReferenceOrigin = DEFAULT_ORIGIN,
+    ) -> None:
+        p = get_profile(profile) if isinstance(profile, str) else profile
+        self.gps = GpsReceiver(p.gps, seed, origin)
+        self.heading = HeadingSensor(p.heading, seed)
+        self.imu = ImuSensor(p.imu, seed)
+        self.wheel_speed = WheelSpeedSensor(p.wheel_speed, seed)
+        self.cones = ConeDetector(p.cones, seed)
+        self._name = p.name
+        self._sensors: tuple[Sensor, ...] = (
+            self.gps,
+            self.heading,
+            self.imu,
+            self.wheel_speed,
+            self.cones,
+        )
+        self._clocks = [CaptureClock(s.config.rate, s.config.phase) for s in self._sensors]
+        self._queues: list[deque[tuple[float, float, Message]]] = [deque() for _ in self._sensors]
+        self._last_t: float | None = None
+        self.seed = seed
+
+    @property
+    def profile(self) -> SensorProfile:
+        """The current settings, including faults and enable flags set since."""
+        return SensorProfile(
+            self._name,
+            self.gps.config,
+            self.heading.config,
+            self.imu.config,
+            self.wheel_speed.config,
+            self.cones.config,
+        )
+
+    def reset(self, seed: int) -> None:
+        """Start a new episode: fresh streams from ``seed``, clocks and queues emptied."""
+        for sensor, clock, queue in zip(self._sensors, self._clocks, self._queues, strict=True):
+            sensor.reset(seed)
+            clock.reset()
+            queue.clear()
+        self._last_t = None
+        self.seed = seed
+
+    def step(self, truth: TruthSample) -> list[Message]:
+        """Capture what is due at ``truth.t``; return what is delivered now.
+
+        Args:
+            truth: the state at this physics step; ``truth.t`` must increase.
+
+        Returns:
+            Messages with stamp + latency <= truth.t, sorted by (stamp, sensor order).
+        """
+        t = truth.t
+        if self._last_t is not None and not t > self._last_t:
+            raise ValueError(f"SensorSuite.step: time must increase, got {t} after {self._last_t}")
+        self._last_t = t
+        for sensor, clock, queue in zip(self._sensors, self._clocks, self._queues, strict=True):
+            if clock.due(t) and sensor.config.enabled:
+                message = sensor.capture(truth)
+                if message is not None:
+                    queue.append((t + sensor.config.latency, t, message))
+        out: list[tuple[float, int, Message]] = []
+        for order, queue in enumerate(self._queues):
+            while queue and queue[0][0] <= t + TIME_EPS:
+                _, stamp, message = queue.popleft()
+                out.append((stamp, order, message))
+        out.sort(key=lambda item: (item[0], item[1]))
+        return [message for _, _, message in out]
+
+    def set_enabled(self, name: str, enabled: bool) -> None:
+        """Switch one sensor on or off by name ("gps", "heading", "imu", ...)."""
+        if name not in SENSOR_ORDER:
+            raise ValueError(f"unknown sensor {name!r}; allowed: {', '.join(SENSOR_ORDER)}")
+        sensor = getattr(self, name)
+        sensor.config = dataclasses.replace(sensor.config, enabled=enabled)
+
+    def inject_gps_dropout(self, start: float, duration: float) -> None:
+        """Add a GPS dropout window [start, start + duration) [s] of capture time."""
+        check_non_negative("inject_gps_dropout", "start", start, "[s]")
+        check_positive("inject_gps_dropout", "duration", duration, "[s]")
+        cfg = self.gps.config
+        self.gps.config = dataclasses.replace(cfg, dropouts=(*cfg.dropouts, (start, duration)))
+
+    def set_gps_multipath(self, probability: float, magnitude: float) -> None:
+        """Replace a fraction ``probability`` of fixes by jumps of ``magnitude`` [m]."""
+        check_probability("set_gps_multipath", "probability", probability)
+        check_non_negative("set_gps_multipath", "magnitude", magnitude, "[m]")
+        self.gps.config = dataclasses.replace(
+            self.gps.config, multipath_probability=probability, multipath_magnitude=magnitude
+        )
+
+    @property
+    def skipped_captures(self) -> dict[str, int]:
+        """Nominal captures that fell between physics steps, per sensor."""
+        return {s.name: c.skipped for s, c in zip(self._sensors, self._clocks, strict=True)}
