@@ -1,9 +1,11 @@
 """Arc-length progress and lateral offset of a point along a polyline.
 
-The projection is searched in a window of segments around the previous
-answer, so a figure-of-eight (skidpad) or a hairpin whose legs lie close
-together never makes the car jump to the other leg. The first query (or one
-after a reset) searches globally with a ``cKDTree``.
+The projection follows the point from segment to segment: from the previous
+answer it walks to the neighbouring segment while that one is closer (a few
+scalar steps per physics step, since the car moves centimetres). A
+figure-of-eight (skidpad) or a hairpin whose legs lie close together therefore
+never makes the car jump to the other leg. The first query (or one after a
+reset) searches globally with a ``cKDTree`` and then a window of segments.
 """
 
 from __future__ import annotations
@@ -59,6 +61,11 @@ class PolylineProgress:
         step = float(np.median(self._lengths))
         self._window = max(2, math.ceil(window_m / step))
         self._tree = cKDTree(pts)
+        # Plain-float copies for the scalar walk (faster than numpy per element).
+        self._starts_list = [(float(a), float(b)) for a, b in self._starts]
+        self._tangents_list = [(float(a), float(b)) for a, b in self._tangents]
+        self._lengths_list = [float(v) for v in self._lengths]
+        self._s0_list = [float(v) for v in self._s0]
         self._last: int | None = None
 
     def reset(self) -> None:
@@ -67,6 +74,8 @@ class PolylineProgress:
 
     def project(self, xy: NDArray[np.float64] | tuple[float, float]) -> Projection:
         """Project one point [m]."""
+        if self._last is not None:
+            return self._walk(float(xy[0]), float(xy[1]), self._last)
         p = np.asarray(xy, dtype=float)
         n = len(self._starts)
         if self._last is None:
@@ -87,6 +96,39 @@ class PolylineProgress:
         r = p - foot[k]
         lateral = float(t[0] * r[1] - t[1] * r[0])
         return Projection(float(self._s0[seg] + u[k]), lateral, seg, (float(t[0]), float(t[1])))
+
+
+    def _foot(self, i: int, px: float, py: float) -> tuple[float, float, float]:
+        """Distance^2 to segment i, the foot's arc position u, and lateral offset."""
+        sx, sy = self._starts_list[i]
+        tx, ty = self._tangents_list[i]
+        rx, ry = px - sx, py - sy
+        u = min(max(rx * tx + ry * ty, 0.0), self._lengths_list[i])
+        fx, fy = rx - tx * u, ry - ty * u
+        return fx * fx + fy * fy, u, tx * fy - ty * fx
+
+    def _step(self, i: int, di: int) -> int | None:
+        j = i + di
+        n = len(self._starts_list)
+        if self.closed:
+            return j % n
+        return j if 0 <= j < n else None
+
+    def _walk(self, px: float, py: float, i: int) -> Projection:
+        best = self._foot(i, px, py)
+        for di in (1, -1):
+            while True:
+                j = self._step(i, di)
+                if j is None:
+                    break
+                cand = self._foot(j, px, py)
+                if cand[0] >= best[0]:
+                    break
+                i, best = j, cand
+        self._last = i
+        _, u, lateral = best
+        t = self._tangents_list[i]
+        return Projection(self._s0_list[i] + u, lateral, i, t)
 
 
 def segment_crossing(

@@ -1,13 +1,17 @@
 """Race control: lap timing, track limits and the stuck detector.
 
 * Laps: the start/finish line is the segment between the big orange cones. A
-  lap counts when the car's reference point crosses it in the driving
-  direction after net progress along the centreline of at least
-  ``min_lap_fraction`` of a lap since the last crossing (a progress guard: rocking
-  back and forth over the line adds no net progress, so it never counts). The
-  crossing time is interpolated linearly within the physics step. The first
-  forward crossing starts the clock (a standing start behind the line, as in
-  FS trackdrive); a car placed on or past the line starts the clock at t = 0.
+  lap counts when the car's reference point (its CG) crosses the finish line
+  in the driving direction after net progress along the centreline of at
+  least ``min_lap_fraction`` of a lap since the last counted crossing (a
+  progress guard: rocking back and forth over the line adds no net progress,
+  so it never counts). The crossing time is interpolated linearly within the
+  physics step. The first forward crossing of the start line starts the clock
+  (a standing start behind the line, as in FS trackdrive); a car placed on or
+  just past the line starts the clock at t = 0. On a loop and the skidpad the
+  start and finish lines are the same line; on the acceleration lane the
+  finish line is the one at 75 m. ``timed_lap_length`` works out the lap
+  length for each layout from the centreline.
 * Off-track: the car is off track when its whole body (all four footprint
   corners) lies outside the boundaries on one side (FS: "off course" when all
   four wheels leave the track). Each excursion is an event with start and end
@@ -93,8 +97,10 @@ class RaceControl:
         centreline: (m, 2) true centreline in driving order [m].
         closed: whether the centreline is a loop.
         half_widths: (m,) half track width at each centreline point [m].
-        start_finish: (2, 2) end points of the timing line [m].
+        start_finish: (2, 2) end points of the start line [m].
         lap_length: distance of one lap along the centreline [m].
+        finish_line: (2, 2) end points of the finish line [m]; default the
+            start line.
         car_length: footprint length [m].
         car_width: footprint width [m].
         rules: settings.
@@ -111,14 +117,19 @@ class RaceControl:
         car_length: float,
         car_width: float,
         rules: RaceRules | None = None,
+        finish_line: NDArray[np.float64] | None = None,
     ) -> None:
         self.rules = rules or RaceRules()
         self.progress = PolylineProgress(centreline, closed)
         self.half_widths = np.asarray(half_widths, dtype=float)
         self.line = np.asarray(start_finish, dtype=float).reshape(2, 2)
+        self.finish = (
+            self.line if finish_line is None else np.asarray(finish_line, float).reshape(2, 2)
+        )
         self.lap_length = float(lap_length)
         hl, hw = 0.5 * car_length, 0.5 * car_width
-        self._corners = np.array([[hl, hw], [hl, -hw], [-hl, hw], [-hl, -hw]])
+        self._corners_list = [(hl, hw), (hl, -hw), (-hl, hw), (-hl, -hw)]
+        self._half_widths_list = [float(h) for h in self.half_widths]
         self.state = RaceState()
         self._s_last: float | None = None
         self._progress_at_crossing = 0.0
@@ -165,16 +176,21 @@ class RaceControl:
         tangent: tuple[float, float],
     ) -> None:
         p0, p1 = pose_prev.xy, pose.xy
-        u = segment_crossing(p0, p1, self.line[0], self.line[1])
-        if u is None or float(np.dot(p1 - p0, tangent)) <= 0.0:
+        if float(np.dot(p1 - p0, tangent)) <= 0.0:
             return
-        t_cross = t_prev + u * (t - t_prev)
         st = self.state
         if st.clock_start is None:
-            st.clock_start = t_cross
-            st.crossing_times.append(t_cross)
-            self._progress_at_crossing = st.progress_m
+            u = segment_crossing(p0, p1, self.line[0], self.line[1])
+            if u is not None:
+                t_cross = t_prev + u * (t - t_prev)
+                st.clock_start = t_cross
+                st.crossing_times.append(t_cross)
+                self._progress_at_crossing = st.progress_m
             return
+        u = segment_crossing(p0, p1, self.finish[0], self.finish[1])
+        if u is None:
+            return
+        t_cross = t_prev + u * (t - t_prev)
         needed = self.rules.min_lap_fraction * self.lap_length
         if st.progress_m - self._progress_at_crossing >= needed:
             st.lap_times.append(t_cross - st.crossing_times[-1])
@@ -184,14 +200,18 @@ class RaceControl:
     def _check_off_track(
         self, t: float, pose: Pose2D, lateral: float, index: int, tangent: tuple[float, float]
     ) -> None:
-        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
         # Lateral offset of each footprint corner: the car's own lateral offset
-        # plus the corner's offset projected on the track's left normal.
+        # plus the corner's offset (rotated into the world) on the track's left
+        # normal (-ty, tx). Scalar maths: this runs every physics step.
+        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
         nx, ny = -tangent[1], tangent[0]
-        corner_world = self._corners @ np.array([[c, s], [-s, c]])
-        corner_lat = lateral + corner_world @ np.array([nx, ny])
-        half = self.half_widths[min(index, len(self.half_widths) - 1)]
-        off = bool(np.all(corner_lat > half) or np.all(corner_lat < -half))
+        half = self._half_widths_list[min(index, len(self._half_widths_list) - 1)]
+        above = below = 0
+        for cx, cy in self._corners_list:
+            lat = lateral + (c * cx - s * cy) * nx + (s * cx + c * cy) * ny
+            above += lat > half
+            below += lat < -half
+        off = above == 4 or below == 4
         st = self.state
         if off and not st.is_off_track:
             st.off_track.append(OffTrackEvent(start=t))
@@ -207,3 +227,42 @@ class RaceControl:
         self.state.stuck = (
             t0 <= horizon and abs(self.state.progress_m - p0) < self.rules.stuck_progress_m
         )
+
+
+def line_crossings_along(
+    polyline: NDArray[np.float64], closed: bool, line: NDArray[np.float64]
+) -> list[float]:
+    """Arc lengths [m] at which a polyline crosses a line segment, in order."""
+    pts = np.vstack([polyline, polyline[:1]]) if closed else np.asarray(polyline)
+    seg = np.hypot(*np.diff(pts, axis=0).T)
+    s0 = np.concatenate([[0.0], np.cumsum(seg)])
+    out: list[float] = []
+    for i in range(len(pts) - 1):
+        u = segment_crossing(pts[i], pts[i + 1], line[0], line[1])
+        if u is not None and (not out or s0[i] + u * seg[i] - out[-1] > 1e-6):
+            out.append(float(s0[i] + u * seg[i]))
+    return out
+
+
+def timed_lap_length(
+    centreline: NDArray[np.float64],
+    closed: bool,
+    start_line: NDArray[np.float64],
+    finish_line: NDArray[np.float64],
+) -> float:
+    """Centreline distance of one timed lap [m].
+
+    A loop: its whole length. An open lane: from the start line to the finish
+    line. A figure of eight (start and finish the same line, crossed several
+    times by an open centreline): between the first two crossings, one circle.
+    """
+    pts = np.asarray(centreline, dtype=float)
+    if closed:
+        return float(np.hypot(*np.diff(np.vstack([pts, pts[:1]]), axis=0).T).sum())
+    starts = line_crossings_along(pts, False, np.asarray(start_line, float))
+    finishes = line_crossings_along(pts, False, np.asarray(finish_line, float))
+    s_start = starts[0] if starts else 0.0
+    later = [s for s in finishes if s > s_start + 1e-6]
+    if later:
+        return later[0] - s_start
+    return float(np.hypot(*np.diff(pts, axis=0).T).sum()) - s_start

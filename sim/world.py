@@ -1,0 +1,209 @@
+"""The simulated world: one place that advances physics and sensors by the clock.
+
+``World`` owns the truth: the pymunk space, the car, the cones, race control
+and the sensor suite. Each call to :meth:`World.step` runs one physics step
+(default 200 Hz) with the current actuator command, then hands the truth of
+that instant to the sensors and returns the measurements whose delivery time
+has come, in stamp order. The gymnasium env (``envs``) wraps this; nothing
+else steps pymunk.
+
+Step skeleton (fixed order, one physics step of ``dt``):
+
+1. ``vehicle.pre_step(dt)``: actuator lag, tyre forces applied to the body.
+2. ``space.step(dt)``: pymunk integrates and resolves car-cone contacts.
+3. ``vehicle.post_step()``; ``cones.update(t)``: hits, down-or-out cones.
+4. ``race.update(...)``: progress, laps (crossing interpolated in the step),
+   off-track, stuck.
+5. ``sensors.step(truth)``: captures due at ``t``; returns deliveries due.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pymunk
+
+from localization.geodesy import DEFAULT_ORIGIN, ReferenceOrigin
+from localization.messages import Message
+from localization.pose import Pose2D
+from sim.cones import ConeField, ConeParams
+from sim.race_control import RaceControl, RaceRules, RaceState, timed_lap_length
+from sim.sensors import SensorProfile, SensorSuite, TruthSample, get_profile
+from sim.sensors.cone_map import ConeMap
+from sim.vehicle import Vehicle, VehicleState
+from sim.vehicle_params import VehicleParams
+from tracks import Track
+
+SLEEP_TIME_THRESHOLD = 0.5  # [s] idle time before pymunk puts a cone to sleep
+IDLE_SPEED_THRESHOLD = 0.02  # [m/s] below this a body counts as idle
+
+
+@dataclass(frozen=True)
+class WorldConfig:
+    """Settings of the simulated world.
+
+    Attributes:
+        physics_rate: physics steps per second [Hz].
+        sensors: sensor profile, or the name of a shipped one
+            (``ideal``, ``rtk``, ``consumer``, ``consumer_white``).
+        vehicle: the car's parameters.
+        cones: cone physics.
+        rules: race control.
+        origin: geodetic origin of `reference`.
+    """
+
+    physics_rate: float = 200.0  # [Hz] ARCHITECTURE.md default
+    sensors: SensorProfile | str = "rtk"
+    vehicle: VehicleParams = field(default_factory=VehicleParams)
+    cones: ConeParams = field(default_factory=ConeParams)
+    rules: RaceRules = field(default_factory=RaceRules)
+    origin: ReferenceOrigin = DEFAULT_ORIGIN
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.physics_rate) and self.physics_rate > 0.0):
+            raise ValueError(
+                f"WorldConfig.physics_rate must be finite and > 0 [Hz], got {self.physics_rate!r}"
+            )
+
+    @property
+    def dt(self) -> float:
+        """Physics step [s]."""
+        return 1.0 / self.physics_rate
+
+    @property
+    def sensor_profile(self) -> SensorProfile:
+        """The sensor profile object."""
+        if isinstance(self.sensors, str):
+            return get_profile(self.sensors)
+        return self.sensors
+
+
+class World:
+    """A car on a cone track with its sensors.
+
+    Args:
+        track: the track (cones, centreline, start pose, timing line).
+        config: world settings.
+        seed: episode seed; every random stream derives from it.
+        start_pose: CG pose to start from; default the track's start pose.
+    """
+
+    def __init__(
+        self,
+        track: Track,
+        config: WorldConfig | None = None,
+        seed: int = 0,
+        start_pose: Pose2D | None = None,
+    ) -> None:
+        self.track = track
+        self.config = config or WorldConfig()
+        self.reset(seed, start_pose)
+
+    def reset(self, seed: int = 0, start_pose: Pose2D | None = None) -> list[Message]:
+        """Rebuild the world at ``t = 0`` for a new episode.
+
+        Returns:
+            The measurements delivered at ``t = 0`` (latency-free captures).
+        """
+        cfg = self.config
+        track = self.track
+        self.seed = int(seed)
+        self.time = 0.0
+        self.steps = 0
+        self.space = pymunk.Space()
+        self.space.gravity = (0.0, 0.0)
+        self.space.sleep_time_threshold = SLEEP_TIME_THRESHOLD
+        self.space.idle_speed_threshold = IDLE_SPEED_THRESHOLD
+        pose = start_pose or track.start_pose
+        self.vehicle = Vehicle(self.space, cfg.vehicle, pose)
+        self.cones = ConeField(self.space, track.cones, tuple(str(k) for k in track.kinds), cfg.cones)
+        self.cone_map = ConeMap(track.cones, tuple(str(k) for k in track.kinds))
+        self._cone_version = self.cones.version
+        self.space.step(1e-9)  # let pymunk register the bodies before they sleep
+        self.cones.sleep_all()
+        closed = track.layout == "closed"
+        self.race = RaceControl(
+            track.centreline,
+            closed,
+            half_widths=0.5 * np.asarray(track.widths),
+            start_finish=np.asarray(track.start_finish),
+            finish_line=np.asarray(track.finish_line),
+            lap_length=timed_lap_length(
+                track.centreline, closed, track.start_finish, track.finish_line
+            ),
+            car_length=cfg.vehicle.length,
+            car_width=cfg.vehicle.width,
+            rules=cfg.rules,
+        )
+        self._state = self.vehicle.state
+        self.race.start(0.0, self._state.pose)
+        self.sensors = SensorSuite(cfg.sensor_profile, seed=self.seed, origin=cfg.origin)
+        return self.sensors.step(self._truth())
+
+    @property
+    def dt(self) -> float:
+        """Physics step [s]."""
+        return self.config.dt
+
+    @property
+    def state(self) -> VehicleState:
+        """The car's true state after the last step."""
+        return self._state
+
+    @property
+    def race_state(self) -> RaceState:
+        """Laps, off-track events, progress, stuck flag."""
+        return self.race.state
+
+    def set_command(self, steer_rad: float, accel_mps2: float) -> None:
+        """Actuator demand held until changed (clipped to the car's limits)."""
+        self.vehicle.set_command(steer_rad, accel_mps2)
+
+    def step(self) -> list[Message]:
+        """Advance one physics step; return the measurements delivered now."""
+        dt = self.dt
+        prev = self._state
+        self.vehicle.pre_step(dt)
+        self.space.step(dt)
+        self.vehicle.post_step()
+        self.steps += 1
+        t = self.steps * dt  # no accumulated round-off: t is exact in steps
+        self.cones.update(t)
+        self._state = self.vehicle.state
+        self.race.update(self.time, t, prev.pose, self._state.pose)
+        self.time = t
+        if self.cones.version != self._cone_version:
+            self.cone_map.update(self.cones.positions)
+            self._cone_version = self.cones.version
+        return self.sensors.step(self._truth())
+
+    def advance(self, duration_s: float) -> list[Message]:
+        """Run whole physics steps covering ``duration_s``; all measurements, in order."""
+        n = max(1, round(duration_s / self.dt))
+        out: list[Message] = []
+        for _ in range(n):
+            out.extend(self.step())
+        return out
+
+    def _truth(self) -> TruthSample:
+        """The truth at the antenna, where the GPS, IMU and cone sensor sit.
+
+        Rigid-body kinematics move the CG's velocity and acceleration to the
+        lever arm r = (rx, ry): v = v_cg + w x r, a = a_cg + dw/dt x r - w^2 r.
+        """
+        s = self._state
+        rx, ry = s.antenna_x, s.antenna_y
+        w, dw = s.yaw_rate, s.yaw_accel
+        return TruthSample(
+            t=self.time,
+            antenna_pose=s.antenna_pose(),
+            speed=s.vx - w * ry,
+            yaw_rate=w,
+            accel_x=s.ax - dw * ry - w * w * rx,
+            accel_y=s.ay + dw * rx - w * w * ry,
+            cone_positions=self.cones.positions,
+            cone_kinds=self.cones.kinds,
+            cone_map=self.cone_map,
+        )
