@@ -1,0 +1,222 @@
+"""The autopilot: the planner's stages wired at their rates, from messages and the frame tree.
+
+What a real car's software has, and nothing more: the frame tree (fed by
+localization), the global path, and the messages it receives.
+
+- Cone detections (10 Hz, ``/sorted_cones_time``) trigger
+  ``classify_cones_by_side`` at the detection's stamp (if the frame tree has
+  no transform there yet, at the latest one, counted in ``tf_latest_count``)
+  and ``reference_path_planning`` with the latest transform, as in the seed.
+  The plan's path is also kept in ``reference``, and the sensor's station
+  along the global path is kept as the next classification's
+  ``station_hint``.
+- Wheel speeds update the speed estimate; without any, the speed is the
+  sensor's displacement in the frame tree over ``speed_window``.
+- Control runs at ``control_rate`` (50 Hz): the path is brought from
+  ``reference`` into the current ``os_sensor`` frame, pure pursuit steers
+  toward its lookahead point, and the PI controller tracks the waypoint
+  speeds. Without a path the car brakes to a stop with the wheels straight.
+
+Every intermediate is an attribute for drawing and recording: ``classified``
+(left/right cones in ``reference``), ``plan`` (bridge lines, midpoints, path,
+waypoints with speeds, status), ``path_now`` and ``lookahead_point`` (current
+``os_sensor``), ``command``; and counters ``plan_count``, ``fallback_count``,
+``failed_count``, ``tf_latest_count``, ``skipped_count``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+import numpy as np
+
+from localization.frames import LATEST, Buffer, ExtrapolationError, TransformError
+from localization.global_path import GlobalPath
+from localization.messages import ConeDetections, Message, WheelSpeed
+from planner.classify import ClassifiedCones, classify_cones_by_side
+from planner.config import AutopilotConfig
+from planner.geometry import FloatArray, PathProjector
+from planner.messages import ControlCommand
+from planner.midline import LocalPlan, PlanStatus, reference_path_planning
+from planner.pure_pursuit import SteeringResult, pure_pursuit
+from planner.speed_control import SpeedController, target_on_path
+
+_TIME_EPS = 1e-9  # [s] tolerance of the control schedule
+
+
+class Autopilot:
+    """The planner and controller, driven by messages at their rates.
+
+    Args:
+        buffer: the frame tree, fed by localization.
+        global_path: the global path in ``reference``.
+        config: every stage's settings, the control rate and the frame names.
+    """
+
+    def __init__(
+        self, buffer: Buffer, global_path: GlobalPath, config: AutopilotConfig | None = None
+    ) -> None:
+        self.buffer = buffer
+        self.config = config or AutopilotConfig()
+        self.projector = PathProjector(global_path)
+        self.speed_controller = SpeedController(self.config.speed_control)
+        self.classified: ClassifiedCones | None = None
+        self.plan: LocalPlan | None = None
+        self.path_reference: FloatArray = np.zeros((0, 2))
+        self.path_now: FloatArray = np.zeros((0, 2))
+        self.steering: SteeringResult | None = None
+        self.target_speed = 0.0  # [m/s]
+        self.command: ControlCommand | None = None
+        self.wheel_speed: float | None = None  # [m/s]
+        self.plan_count = 0
+        self.fallback_count = 0
+        self.failed_count = 0
+        self.tf_latest_count = 0
+        self.skipped_count = 0
+        self.station_hint: float | None = None  # [m] the sensor's last station
+        self._last_control: float | None = None
+        self._next_control: float | None = None
+
+    # -- intermediates -----------------------------------------------------------------------
+
+    @property
+    def left_cones(self) -> FloatArray:
+        """(n, 2) left cones of the last detection, ``reference`` [m]."""
+        return self.classified.left if self.classified is not None else np.zeros((0, 2))
+
+    @property
+    def right_cones(self) -> FloatArray:
+        """(n, 2) right cones of the last detection, ``reference`` [m]."""
+        return self.classified.right if self.classified is not None else np.zeros((0, 2))
+
+    @property
+    def fallback(self) -> bool:
+        """Whether the current path is a previous one carried forward."""
+        return self.plan is not None and self.plan.status is PlanStatus.FALLBACK
+
+    @property
+    def lookahead_point(self) -> FloatArray | None:
+        """(2,) the last lookahead point, in ``os_sensor`` at the last control step [m]."""
+        return None if self.steering is None else self.steering.target
+
+    # -- inputs ------------------------------------------------------------------------------
+
+    def handle(self, message: Message) -> None:
+        """Take one message: detections plan, wheel speeds update the speed; others are ignored."""
+        if isinstance(message, ConeDetections):
+            self.on_detections(message)
+        elif isinstance(message, WheelSpeed):
+            self.on_wheel_speed(message)
+
+    def on_wheel_speed(self, message: WheelSpeed) -> None:
+        """Update the speed estimate [m/s] (a non-finite speed is ignored)."""
+        if math.isfinite(message.speed):
+            self.wheel_speed = float(message.speed)
+
+    def on_detections(self, message: ConeDetections) -> LocalPlan | None:
+        """Classify and plan; returns the plan, or None if the frame tree could not serve it."""
+        c = self.config
+        try:
+            try:
+                classified = classify_cones_by_side(
+                    message, self.buffer, self.projector, c.classifier,
+                    station_hint=self.station_hint, reference_frame=c.reference_frame,
+                )  # fmt: skip
+            except ExtrapolationError:
+                classified = classify_cones_by_side(
+                    message, self.buffer, self.projector, c.classifier, time=LATEST,
+                    station_hint=self.station_hint, reference_frame=c.reference_frame,
+                )  # fmt: skip
+                self.tf_latest_count += 1
+            plan = reference_path_planning(
+                classified,
+                self.buffer,
+                c.midline,
+                c.speed_profile,
+                v_start=self.speed(),
+                previous=self.plan,
+                sensor_frame=c.sensor_frame,
+            )
+            path_reference = self.buffer.transform_points(
+                c.reference_frame, c.sensor_frame, plan.path, plan.header.stamp
+            )
+        except TransformError:
+            self.skipped_count += 1
+            return None
+        self.classified = classified
+        self.station_hint = classified.sensor_station
+        self.plan = plan
+        self.path_reference = path_reference
+        self.plan_count += 1
+        self.fallback_count += plan.status is PlanStatus.FALLBACK
+        self.failed_count += plan.status is PlanStatus.FAILED
+        return plan
+
+    def speed(self) -> float:
+        """Speed estimate [m/s]: the last wheel speed, else from the frame tree, else 0."""
+        if self.wheel_speed is not None:
+            return self.wheel_speed
+        c = self.config
+        try:
+            now = self.buffer.lookup_transform(c.reference_frame, c.sensor_frame, LATEST)
+            t0 = now.stamp - c.speed_window
+            before = self.buffer.lookup_pose2d(c.reference_frame, c.sensor_frame, t0)
+        except TransformError:
+            return 0.0
+        if t0 < 0.0:
+            return 0.0
+        pose = now.to_pose2d()
+        return math.hypot(pose.x - before.x, pose.y - before.y) / c.speed_window
+
+    # -- control -----------------------------------------------------------------------------
+
+    def control(self, t: float) -> ControlCommand:
+        """One control step at time ``t`` [s]: steering and acceleration."""
+        c = self.config
+        dt = 1.0 / c.control_rate if self._last_control is None else t - self._last_control
+        self._last_control = t
+        speed = self.speed()
+        path = self._path_in_sensor_frame()
+        if len(path) == 0 or self.plan is None:
+            self.steering = None
+            self.target_speed = 0.0
+            acceleration = self.speed_controller.step(0.0, speed, dt)
+            self.command = ControlCommand(t, 0.0, acceleration)
+            return self.command
+        self.steering = pure_pursuit(path, speed, c.pure_pursuit)
+        axle = np.array([c.pure_pursuit.rear_axle_x, 0.0])
+        v_ref, a_ff = target_on_path(path, self.plan.speeds, axle, speed, c.speed_control)
+        self.target_speed = v_ref
+        acceleration = self.speed_controller.step(v_ref, speed, dt, a_ff)
+        self.command = ControlCommand(t, self.steering.steering, acceleration)
+        return self.command
+
+    def _path_in_sensor_frame(self) -> FloatArray:
+        """The plan's path in the latest ``os_sensor`` frame (the planned one if that fails)."""
+        if self.plan is None or len(self.path_reference) == 0:
+            self.path_now = np.zeros((0, 2))
+            return self.path_now
+        c = self.config
+        try:
+            self.path_now = self.buffer.transform_points(
+                c.sensor_frame, c.reference_frame, self.path_reference, LATEST
+            )
+        except TransformError:
+            self.path_now = self.plan.path
+        return self.path_now
+
+    def step(self, t: float, messages: Iterable[Message] = ()) -> ControlCommand | None:
+        """Take the messages delivered at ``t`` [s], then control if a control step is due.
+
+        Returns:
+            The command of a control step run now, else None.
+        """
+        for message in messages:
+            self.handle(message)
+        if self._next_control is not None and t < self._next_control - _TIME_EPS:
+            return None
+        period = 1.0 / self.config.control_rate
+        nxt = t + period if self._next_control is None else self._next_control + period
+        self._next_control = max(nxt, t + _TIME_EPS)
+        return self.control(t)

@@ -1,0 +1,335 @@
+"""Delaunay bridges: the edges across the track whose midpoints trace its middle.
+
+Steps of ``reference_path_planning`` that work on cones in ``os_sensor``:
+
+0. ``estimate_track``: the width and middle of the track in view, as the
+   medians over each cone's nearest valid partner (the checks of step 3) of
+   the offset difference and the mean offset. A cone more than
+   ``boundary_tolerance`` inside its boundary line (``TrackEstimate.
+   boundary_offset``) is then dropped: a false positive on the track, or a
+   cone labelled against its position (misclassified), would otherwise take
+   the Delaunay edges of the real bridges around it.
+1. ``virtual_partners``: a cone with no cone of the other side within
+   ``partner_radius`` (and ``max_station_gap`` of station), whose offset is
+   within ``partner_offset_tolerance`` of its boundary line (a boundary cone,
+   not a stray or misclassified one), gets a virtual partner one track width
+   across, along the global path's normal at the cone: the estimated width,
+   or the nominal 3 m (FS minimum) when fewer than ``min_width_samples`` are
+   measured. This fills a gap of missing cones on one side and, when only
+   one side is in view, puts the path half that width inside the visible
+   boundary.
+2. ``delaunay_edges``: the edges of scipy's Delaunay triangulation of all cones.
+3. ``find_bridges``: the edges that join a left cone to a right cone (the
+   seed's ``/delaunay_internal_lines``), each checked:
+
+   - ``offset_left - offset_right`` within [min_track_width, max_track_width],
+     and within ``width_tolerance`` of the measured width when there is one:
+     a bridge spans the track across the global path. This rejects a
+     misclassified cone (it sits on the same side as the cones it would join)
+     and a false positive inside the track (too narrow a span).
+   - length <= ``max_bridge_length``.
+   - station difference <= ``max_station_gap``: both cones belong to the same
+     stretch of track. This rejects a bridge across a hairpin's infield to
+     the far side, whose cones are near their own, later, stretch of the
+     global path.
+   - not both ends virtual.
+
+   With ``bridge_selection == "shortest"`` only the valid bridges that are the
+   shortest valid bridge of one of their cones are used: the rungs across the
+   track. A diagonal's midpoint lies off the middle of a curve (by about
+   ``R_in R_out dtheta^2 / (8 R)``, 0.2 m for 5 m spacing at R = 15 m), a
+   rung's does not.
+4. ``boundary_edges``: same-side edges along one boundary (offset difference
+   below the minimum width, same stretch of track), which a sound path may not
+   cross.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import Delaunay, QhullError
+
+from planner.config import MidlineConfig
+from planner.geometry import FloatArray, IntArray, StationAxis
+
+BoolArray = NDArray[np.bool_]
+
+
+@dataclass(frozen=True, slots=True)
+class ConeSet:
+    """Cones in ``os_sensor`` with what the classifier learnt about them.
+
+    Attributes:
+        points: (n, 2) positions [m].
+        side: (n,) +1 left, -1 right.
+        offset: (n,) signed offset from the global path, + left [m].
+        station: (n,) station along the global path [m].
+        tangent: (n, 2) unit global-path direction at the cone, in ``os_sensor``.
+        virtual: (n,) True for a virtual partner.
+        axis: the global path's station axis.
+    """
+
+    points: FloatArray
+    side: NDArray[np.int8]
+    offset: FloatArray
+    station: FloatArray
+    tangent: FloatArray
+    virtual: BoolArray
+    axis: StationAxis
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+    def station_gap(self, i: IntArray, j: IntArray) -> FloatArray:
+        """|station[j] - station[i]|, wrapped on a closed path [m]."""
+        return np.abs(self.axis.difference(self.station[j], self.station[i]))
+
+    def select(self, keep: BoolArray | IntArray) -> ConeSet:
+        """The cones where ``keep`` (mask or indices)."""
+        return ConeSet(
+            points=self.points[keep],
+            side=self.side[keep],
+            offset=self.offset[keep],
+            station=self.station[keep],
+            tangent=self.tangent[keep],
+            virtual=self.virtual[keep],
+            axis=self.axis,
+        )
+
+    def join(self, other: ConeSet) -> ConeSet:
+        """This set followed by ``other``."""
+        return ConeSet(
+            points=np.vstack([self.points, other.points]),
+            side=np.concatenate([self.side, other.side]),
+            offset=np.concatenate([self.offset, other.offset]),
+            station=np.concatenate([self.station, other.station]),
+            tangent=np.vstack([self.tangent, other.tangent]),
+            virtual=np.concatenate([self.virtual, other.virtual]),
+            axis=self.axis,
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class Bridges:
+    """Left-right Delaunay edges and their checks.
+
+    Attributes:
+        left: (m,) index of each bridge's left cone.
+        right: (m,) index of each bridge's right cone.
+        length: (m,) [m].
+        valid: (m,) passes the checks.
+        used: (m,) valid and selected for the midline.
+        midpoints: (m, 2) [m].
+        station: (m,) station of each midpoint [m].
+    """
+
+    left: IntArray
+    right: IntArray
+    length: FloatArray
+    valid: BoolArray
+    used: BoolArray
+    midpoints: FloatArray
+    station: FloatArray
+
+
+@dataclass(frozen=True, slots=True)
+class PairTable:
+    """Every (left, right) pair of real cones, for the width and partner searches.
+
+    Attributes:
+        left: (a,) indices of the left cones.
+        right: (b,) indices of the right cones.
+        dist: (a, b) distance [m].
+        same_stretch: (a, b) station gap <= ``max_station_gap``.
+        span: (a, b) offset of the left cone minus offset of the right one [m].
+        middle: (a, b) mean of the two offsets [m].
+    """
+
+    left: IntArray
+    right: IntArray
+    dist: FloatArray
+    same_stretch: BoolArray
+    span: FloatArray
+    middle: FloatArray
+
+
+def pair_table(cones: ConeSet, config: MidlineConfig) -> PairTable:
+    """The (left, right) tables of :class:`PairTable`."""
+    left = np.flatnonzero(cones.side > 0)
+    right = np.flatnonzero(cones.side < 0)
+    pl, pr = cones.points[left], cones.points[right]
+    dist = np.hypot(np.subtract.outer(pl[:, 0], pr[:, 0]), np.subtract.outer(pl[:, 1], pr[:, 1]))
+    gap = cones.station_gap(left[:, None], right[None, :])
+    span = np.subtract.outer(cones.offset[left], cones.offset[right])
+    middle = 0.5 * np.add.outer(cones.offset[left], cones.offset[right])
+    return PairTable(left, right, dist, gap <= config.max_station_gap, span, middle)
+
+
+@dataclass(frozen=True, slots=True)
+class TrackEstimate:
+    """The track in view, as seen across it.
+
+    Attributes:
+        width: track width [m].
+        centre: offset of the track's middle from the global path, + left [m].
+        measured: False when too few samples: the nominal width, centre 0.
+    """
+
+    width: float
+    centre: float
+    measured: bool
+
+    def boundary_offset(self, cones: ConeSet) -> FloatArray:
+        """(n,) how far each cone lies outside its boundary line, as seen from its side [m].
+
+        ``side * (offset - centre) - width / 2``: 0 on the boundary, < 0 inside
+        the track, > 0 outside; a cone labelled against its position is far inside.
+        """
+        return cones.side * (cones.offset - self.centre) - 0.5 * self.width
+
+
+def estimate_track(pairs: PairTable, config: MidlineConfig) -> TrackEstimate:
+    """Median width and centre offset of the track in view.
+
+    Each cone's nearest valid partner (other side, span, length and station
+    checks of ``find_bridges``) gives one sample of each: the offset
+    difference and the mean offset. Fewer than ``min_width_samples`` samples
+    give the nominal width and the global path as the middle.
+    """
+    nominal = TrackEstimate(config.nominal_track_width, 0.0, measured=False)
+    valid = (
+        pairs.same_stretch
+        & (pairs.span >= config.min_track_width)
+        & (pairs.span <= config.max_track_width)
+        & (pairs.dist <= config.max_bridge_length)
+    )
+    if not np.any(valid):
+        return nominal
+    masked = np.where(valid, pairs.dist, np.inf)
+    rows = np.flatnonzero(valid.any(axis=1))
+    cols = np.flatnonzero(valid.any(axis=0))
+    row_pick = (rows, np.argmin(masked[rows], axis=1))
+    col_pick = (np.argmin(masked[:, cols], axis=0), cols)
+    if len(rows) + len(cols) < config.min_width_samples:
+        return nominal
+    span = np.concatenate([pairs.span[row_pick], pairs.span[col_pick]])
+    middle = np.concatenate([pairs.middle[row_pick], pairs.middle[col_pick]])
+    return TrackEstimate(float(np.median(span)), float(np.median(middle)), measured=True)
+
+
+def virtual_partners(
+    cones: ConeSet, pairs: PairTable, config: MidlineConfig, track: TrackEstimate
+) -> ConeSet:
+    """Step 1: virtual partners for cones with nobody across the track.
+
+    Args:
+        cones: the real cones.
+        pairs: their pair table.
+        config: the settings.
+        track: the width and middle in view.
+
+    Returns:
+        The virtual cones (possibly none).
+    """
+    close = pairs.same_stretch & (pairs.dist <= config.partner_radius)
+    near = np.zeros(len(cones), dtype=bool)
+    near[pairs.left] = close.any(axis=1)
+    near[pairs.right] = close.any(axis=0)
+    # On its boundary line: a stray or misclassified cone gets no partner.
+    boundary = np.abs(track.boundary_offset(cones)) <= config.partner_offset_tolerance
+    need = ~near & boundary
+    t = cones.tangent[need]
+    left_normal = np.column_stack([-t[:, 1], t[:, 0]])
+    side = cones.side[need]
+    shift = side[:, None] * track.width * left_normal
+    return ConeSet(
+        points=cones.points[need] - shift,
+        side=(-side).astype(np.int8),
+        offset=cones.offset[need] - side * track.width,
+        station=cones.station[need],
+        tangent=t,
+        virtual=np.ones(len(t), dtype=bool),
+        axis=cones.axis,
+    )
+
+
+def delaunay_edges(points: FloatArray) -> IntArray:
+    """Step 2: unique edges (e, 2), i < j, of the Delaunay triangulation of (n, 2) points.
+
+    Fewer than three points, or points all on one line, have no triangulation:
+    two points give their one edge, otherwise no edges.
+    """
+    n = len(points)
+    if n == 2:
+        return np.array([[0, 1]], dtype=np.intp)
+    if n < 3:
+        return np.zeros((0, 2), dtype=np.intp)
+    try:
+        tri = Delaunay(points)
+    except QhullError:
+        return np.zeros((0, 2), dtype=np.intp)
+    indptr, indices = tri.vertex_neighbor_vertices
+    rows = np.repeat(np.arange(n), np.diff(indptr))
+    keep = rows < indices
+    return np.column_stack([rows[keep], indices[keep]]).astype(np.intp)
+
+
+def find_bridges(
+    cones: ConeSet, edges: IntArray, config: MidlineConfig, track: TrackEstimate | None = None
+) -> Bridges:
+    """Step 3: the left-right edges, their checks, selection and midpoints.
+
+    Args:
+        cones: real and virtual cones.
+        edges: (e, 2) Delaunay edges.
+        config: the checks.
+        track: the width in view; its width is checked only when measured.
+    """
+    i, j = edges[:, 0], edges[:, 1]
+    across = cones.side[i] != cones.side[j]
+    i, j = i[across], j[across]
+    swap = cones.side[i] < 0
+    left = np.where(swap, j, i)
+    right = np.where(swap, i, j)
+    vec = cones.points[right] - cones.points[left]
+    length = np.hypot(vec[:, 0], vec[:, 1])
+    span = cones.offset[left] - cones.offset[right]
+    valid = (
+        (span >= config.min_track_width)
+        & (span <= config.max_track_width)
+        & (length <= config.max_bridge_length)
+        & (cones.station_gap(left, right) <= config.max_station_gap)
+        & ~(cones.virtual[left] & cones.virtual[right])
+    )
+    if track is not None and track.measured:
+        valid &= np.abs(span - track.width) <= config.width_tolerance
+    used = valid.copy()
+    if config.bridge_selection == "shortest" and np.any(valid):
+        best = np.full(len(cones), np.inf)
+        np.minimum.at(best, left[valid], length[valid])
+        np.minimum.at(best, right[valid], length[valid])
+        used = valid & ((length <= best[left]) | (length <= best[right]))
+    ds = cones.axis.difference(cones.station[right], cones.station[left])
+    return Bridges(
+        left=left,
+        right=right,
+        length=length,
+        valid=valid,
+        used=used,
+        midpoints=cones.points[left] + 0.5 * vec,
+        station=cones.station[left] + 0.5 * ds,
+    )
+
+
+def boundary_edges(cones: ConeSet, edges: IntArray, config: MidlineConfig) -> IntArray:
+    """Step 4: same-side edges (e, 2) that run along one boundary of one stretch of track."""
+    i, j = edges[:, 0], edges[:, 1]
+    along = (
+        (cones.side[i] == cones.side[j])
+        & (np.abs(cones.offset[i] - cones.offset[j]) < config.min_track_width)
+        & (cones.station_gap(i, j) <= config.max_station_gap)
+    )
+    return edges[along]

@@ -1,0 +1,341 @@
+"""Planner and controller settings: frozen dataclasses with a unit on every field.
+
+Every settings class derives from :class:`Settings`, whose :meth:`Settings.from_dict`
+builds it from a plain mapping (nested for :class:`AutopilotConfig`) and raises
+``ValueError`` naming the allowed keys when a key is unknown. Values are
+range-checked when the object is built.
+
+Defaults and where they come from (``shared/REFERENCES.md``):
+
+- Track width >= 3 m and cone spacing <= 5 m (FS rules): the bridge limits.
+- Wheelbase 1.53 m (fssim ``car.yaml``), steering +-0.47 rad (EUFS QEV3), drive
+  +3 m/s^2 and brake -10 m/s^2 (EUFS): the vehicle limits, the same defaults as
+  ``sim.vehicle_params.VehicleParams``. The rear axle sits 0.465 m behind
+  ``os_sensor`` there (CG 0.765 m ahead of the rear axle, antenna 0.3 m behind
+  the CG); the planner never reads ``sim``, so the number is repeated here.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Self
+
+from localization.messages import FRAME_OS_SENSOR, FRAME_REFERENCE
+
+
+def _check(owner: str, name: str, value: float, lo: float, hi: float = math.inf) -> None:
+    """Raise ValueError unless ``lo <= value <= hi`` and ``value`` is not NaN."""
+    if not (lo <= value <= hi):
+        raise ValueError(f"{owner}.{name} = {value!r} is out of range: allowed [{lo}, {hi}]")
+
+
+class Settings:
+    """Mixin for frozen settings dataclasses: construction from a mapping."""
+
+    @classmethod
+    def from_dict(cls, values: Mapping[str, Any]) -> Self:
+        """Build the settings from ``values``; nested settings may be mappings too.
+
+        Raises:
+            ValueError: a key that is not a field, with the allowed keys listed,
+                or a value out of range.
+        """
+        fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+        unknown = sorted(set(values) - set(fields))
+        if unknown:
+            raise ValueError(
+                f"{cls.__name__}: unknown keys {unknown}; allowed keys: {sorted(fields)}"
+            )
+        kwargs: dict[str, Any] = {}
+        for name, value in values.items():
+            spec = fields[name]
+            factory = spec.default_factory
+            template = factory() if factory is not dataclasses.MISSING else spec.default
+            if isinstance(template, Settings) and isinstance(value, Mapping):
+                kwargs[name] = type(template).from_dict(value)
+            else:
+                kwargs[name] = value
+        return cls(**kwargs)
+
+
+@dataclass(frozen=True)
+class ClassifierConfig(Settings):
+    """Settings of ``classify_cones_by_side``.
+
+    Attributes:
+        mode: ``"geometric"`` (the seed: side of the nearest global-path
+            segment, colour ignored) or ``"colour"`` (a colour listed below
+            decides; any other colour, and a colour-blind detection, falls back
+            to geometric).
+        left_colours: colours taken as left cones in colour mode (FS rules: blue).
+        right_colours: colours taken as right cones in colour mode (FS: yellow).
+        window_back: the stretch of global path preferred for projection
+            starts this far behind the sensor's station [m] ...
+        window_ahead: ... and ends this far ahead [m]. Keep the stretch
+            shorter than any loop that returns to the same place (skidpad
+            circle: 57 m) so that it holds one pass only.
+        window_penalty: segments outside the stretch count this much farther
+            [m]: on a path passing the same place twice (skidpad) the current
+            pass wins near-ties. 0 gives the seed's plain nearest segment,
+            ``inf`` projects onto the stretch only.
+    """
+
+    mode: str = "geometric"
+    left_colours: tuple[str, ...] = ("blue",)
+    right_colours: tuple[str, ...] = ("yellow",)
+    window_back: float = 20.0  # [m] a 360 deg detector also sees 15-20 m behind
+    window_ahead: float = 35.0  # [m] beyond 30 m of view; 55 m in all < the skidpad circle
+    window_penalty: float = 2.0  # [m]
+
+    def __post_init__(self) -> None:
+        for name in ("window_back", "window_ahead", "window_penalty"):
+            _check("ClassifierConfig", name, getattr(self, name), 0.0)
+        if self.mode not in ("geometric", "colour"):
+            raise ValueError(
+                f"ClassifierConfig.mode = {self.mode!r}: allowed 'geometric', 'colour'"
+            )
+        if set(self.left_colours) & set(self.right_colours):
+            raise ValueError("ClassifierConfig: a colour cannot be both left and right")
+
+
+@dataclass(frozen=True)
+class MidlineConfig(Settings):
+    """Settings of ``reference_path_planning`` (the Delaunay midline).
+
+    Attributes:
+        max_range: cones farther than this from ``os_sensor`` are ignored [m].
+        min_x: cones behind this x in ``os_sensor`` are ignored [m].
+        min_boundary_offset: a cone closer than this to the global path cannot
+            be a boundary cone of a track >= 3 m wide; it is dropped as a
+            false positive [m].
+        max_boundary_offset: nor can a cone farther than this [m].
+        min_track_width: a bridge must span at least this much across the
+            path, measured as the difference of its cones' signed offsets [m].
+        max_track_width: and at most this much [m].
+        max_bridge_length: longest bridge, end to end [m].
+        max_station_gap: largest difference of the two cones' stations along
+            the global path for a bridge or a partner; larger means the cones
+            belong to different stretches of track (a hairpin's far side) [m].
+        partner_radius: a cone with no opposite-side cone this close (and
+            within ``max_station_gap``) gets a virtual partner [m].
+        nominal_track_width: width used for virtual partners when the view has
+            fewer than ``min_width_samples`` measured bridges [m] (FS minimum).
+        partner_offset_tolerance: only a cone within this of its boundary
+            line gets a virtual partner (a stray cone does not) [m].
+        boundary_tolerance: once the width and middle are measured, a cone
+            more than this inside its boundary line is dropped [m].
+        min_width_samples: measured bridges needed to use their median width.
+        width_tolerance: when the width is measured, a bridge's span must be
+            within this of it [m] (rejects cones of another stretch of track
+            that happen to pass the other checks).
+        bridge_selection: ``"shortest"`` keeps, of the valid bridges, those
+            that are the shortest bridge of one of their cones (the rungs
+            across the track); ``"all"`` keeps every valid bridge (the seed).
+        start_min_x: the first midpoint must lie ahead of this x [m].
+        start_station_back: and no more than this behind the sensor's station [m].
+        start_station_ahead: and no more than this ahead of it [m].
+        max_step: longest step between consecutive midpoints of the chain [m].
+        max_station_step: largest station advance of one step [m].
+        station_back_tolerance: largest station regression of one step [m].
+        min_step_advance: a step must advance along the track by at least
+            this fraction of its length: no sideways jumps (0.5: within
+            about 60 degrees of the track) [-].
+        min_midpoint_spacing: a midpoint this close to the last one is merged [m].
+        min_spline_points: fewer ordered midpoints use linear interpolation.
+        spline_degree: B-spline degree (splprep ``k``).
+        spline_sigma: expected midpoint noise; splprep smoothing
+            ``s = m * sigma^2`` for m points (0 interpolates) [m].
+        spacing: arc-length step of the resampled path [m] (seed: 0.5 m).
+        max_start_distance: the path must start this close to the sensor [m].
+        min_path_length: a shorter path is not sound [m].
+    """
+
+    max_range: float = 30.0  # [m]
+    min_x: float = -3.0  # [m]
+    min_boundary_offset: float = 0.5  # [m]
+    max_boundary_offset: float = 4.0  # [m]
+    min_track_width: float = 2.5  # [m] FS rules: width >= 3 m, minus margin
+    max_track_width: float = 6.0  # [m]
+    max_bridge_length: float = 7.0  # [m]
+    max_station_gap: float = 6.0  # [m] FS cone spacing <= 5 m, plus margin
+    partner_radius: float = 4.0  # [m]
+    nominal_track_width: float = 3.0  # [m] FS rules minimum
+    partner_offset_tolerance: float = 0.5  # [m]
+    boundary_tolerance: float = 0.75  # [m] half the FS minimum half-width
+    min_width_samples: int = 2
+    width_tolerance: float = 0.75  # [m]
+    bridge_selection: str = "shortest"
+    start_min_x: float = 0.0  # [m]
+    start_station_back: float = 3.0  # [m]
+    start_station_ahead: float = 10.0  # [m]
+    max_step: float = 7.0  # [m]
+    max_station_step: float = 8.0  # [m]
+    station_back_tolerance: float = 1.0  # [m]
+    min_step_advance: float = 0.5  # [-]
+    min_midpoint_spacing: float = 1.0  # [m]
+    min_spline_points: int = 4
+    spline_degree: int = 3
+    spline_sigma: float = 0.0  # [m]
+    spacing: float = 0.5  # [m] seed
+    max_start_distance: float = 10.0  # [m]
+    min_path_length: float = 1.0  # [m]
+
+    def __post_init__(self) -> None:
+        owner = "MidlineConfig"
+        for name in (
+            "max_range",
+            "min_track_width",
+            "max_bridge_length",
+            "max_station_gap",
+            "partner_radius",
+            "nominal_track_width",
+            "max_step",
+            "max_station_step",
+            "spacing",
+        ):
+            _check(owner, name, getattr(self, name), 1e-9)
+        for name in (
+            "min_boundary_offset",
+            "partner_offset_tolerance",
+            "boundary_tolerance",
+            "width_tolerance",
+            "min_step_advance",
+            "station_back_tolerance",
+            "min_midpoint_spacing",
+            "spline_sigma",
+            "start_station_back",
+            "start_station_ahead",
+            "max_start_distance",
+            "min_path_length",
+        ):
+            _check(owner, name, getattr(self, name), 0.0)
+        _check(owner, "max_track_width", self.max_track_width, self.min_track_width)
+        _check(owner, "max_boundary_offset", self.max_boundary_offset, self.min_boundary_offset)
+        _check(owner, "spline_degree", self.spline_degree, 1, 5)
+        _check(owner, "min_spline_points", self.min_spline_points, self.spline_degree + 1)
+        _check(owner, "min_width_samples", self.min_width_samples, 1)
+        if self.bridge_selection not in ("shortest", "all"):
+            raise ValueError(
+                f"{owner}.bridge_selection = {self.bridge_selection!r}: allowed 'shortest', 'all'"
+            )
+
+
+@dataclass(frozen=True)
+class SpeedProfileConfig(Settings):
+    """Limits of the speed profile along the local path.
+
+    Attributes:
+        a_lat_max: lateral acceleration limit [m/s^2]; v = sqrt(a_lat_max / |kappa|).
+        a_drive: longitudinal acceleration limit of the forward pass [m/s^2].
+        a_brake: deceleration limit of the backward pass [m/s^2], > 0.
+        v_max: speed cap [m/s].
+        horizon_stop: plan to stand still at the end of the known path, so the
+            car can always stop within what it has seen.
+    """
+
+    a_lat_max: float = 6.0  # [m/s^2] ~0.6 g, margin below mu = 1.0 (fssim)
+    a_drive: float = 3.0  # [m/s^2] EUFS +3
+    a_brake: float = 6.0  # [m/s^2] planning margin below EUFS -10
+    v_max: float = 15.0  # [m/s]
+    horizon_stop: bool = True
+
+    def __post_init__(self) -> None:
+        for name in ("a_lat_max", "a_drive", "a_brake", "v_max"):
+            _check("SpeedProfileConfig", name, getattr(self, name), 1e-9)
+
+
+@dataclass(frozen=True)
+class PurePursuitConfig(Settings):
+    """Pure-pursuit steering about the rear axle.
+
+    Attributes:
+        wheelbase: rear axle to front axle [m] (fssim 1.53 m).
+        rear_axle_x: rear axle position along x in ``os_sensor`` [m].
+        max_steer: front wheel angle limit [rad] (EUFS 0.47 rad).
+        lookahead_min: lookahead distance at standstill [m].
+        lookahead_gain: growth of the lookahead with speed [s]:
+            L_d = clip(lookahead_min + lookahead_gain * v, lookahead_min, lookahead_max).
+        lookahead_max: longest lookahead distance [m].
+    """
+
+    wheelbase: float = 1.53  # [m] fssim car.yaml
+    rear_axle_x: float = -0.465  # [m] sim default: 0.765 - 0.3 behind the antenna
+    max_steer: float = 0.47  # [rad] EUFS QEV3
+    lookahead_min: float = 2.0  # [m]
+    lookahead_gain: float = 0.25  # [s] L_d 4.5 m at 10 m/s; 4.4 m in R 3.5 m cut 0.77 m
+    lookahead_max: float = 10.0  # [m]
+
+    def __post_init__(self) -> None:
+        owner = "PurePursuitConfig"
+        _check(owner, "wheelbase", self.wheelbase, 1e-9)
+        _check(owner, "max_steer", self.max_steer, 1e-9, math.pi / 2)
+        _check(owner, "lookahead_min", self.lookahead_min, 1e-9)
+        _check(owner, "lookahead_gain", self.lookahead_gain, 0.0)
+        _check(owner, "lookahead_max", self.lookahead_max, self.lookahead_min)
+        _check(owner, "rear_axle_x", self.rear_axle_x, -math.inf, math.inf)
+
+
+@dataclass(frozen=True)
+class SpeedControlConfig(Settings):
+    """Longitudinal PI controller with feed-forward.
+
+    Attributes:
+        kp: proportional gain [1/s] (acceleration per speed error).
+        ki: integral gain [1/s^2].
+        feed_forward: gain on the profile's planned acceleration [-].
+        integral_limit: bound on the integrated speed error [m].
+        max_accel: largest acceleration command [m/s^2] (EUFS +3).
+        max_decel: largest deceleration command [m/s^2], > 0 (EUFS -10).
+        preview_time: the target speed is read this far ahead along the path [s].
+        preview_min: and at least this far [m].
+    """
+
+    kp: float = 1.5  # [1/s]
+    ki: float = 0.5  # [1/s^2]
+    feed_forward: float = 1.0  # [-]
+    integral_limit: float = 4.0  # [m]
+    max_accel: float = 3.0  # [m/s^2] EUFS
+    max_decel: float = 10.0  # [m/s^2] EUFS
+    preview_time: float = 0.3  # [s]
+    preview_min: float = 1.0  # [m]
+
+    def __post_init__(self) -> None:
+        for name in ("kp", "ki", "feed_forward", "integral_limit", "preview_time", "preview_min"):
+            _check("SpeedControlConfig", name, getattr(self, name), 0.0)
+        for name in ("max_accel", "max_decel"):
+            _check("SpeedControlConfig", name, getattr(self, name), 1e-9)
+
+
+@dataclass(frozen=True)
+class AutopilotConfig(Settings):
+    """The whole autopilot: its stages' settings, rates and frame names.
+
+    Attributes:
+        classifier: cone side classification.
+        midline: Delaunay midline planning.
+        speed_profile: speed limits along the path.
+        pure_pursuit: steering.
+        speed_control: longitudinal control.
+        control_rate: control (steering, acceleration) rate [Hz] (design card: 50 Hz).
+        speed_window: span of the frame-tree speed estimate used when no wheel
+            speed has arrived [s].
+        reference_frame: the world frame (a vehicle prefix is allowed).
+        sensor_frame: the cone sensor frame, in which the path is planned.
+    """
+
+    classifier: ClassifierConfig = field(default_factory=ClassifierConfig)
+    midline: MidlineConfig = field(default_factory=MidlineConfig)
+    speed_profile: SpeedProfileConfig = field(default_factory=SpeedProfileConfig)
+    pure_pursuit: PurePursuitConfig = field(default_factory=PurePursuitConfig)
+    speed_control: SpeedControlConfig = field(default_factory=SpeedControlConfig)
+    control_rate: float = 50.0  # [Hz]
+    speed_window: float = 0.1  # [s]
+    reference_frame: str = FRAME_REFERENCE
+    sensor_frame: str = FRAME_OS_SENSOR
+
+    def __post_init__(self) -> None:
+        _check("AutopilotConfig", "control_rate", self.control_rate, 1e-9)
+        _check("AutopilotConfig", "speed_window", self.speed_window, 1e-9)

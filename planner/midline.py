@@ -1,0 +1,300 @@
+"""reference_path_planning: the local path between the cones, in ``os_sensor``.
+
+The seed's node, step by step (each step named as a function):
+
+1. ``cones_to_sensor``: left and right cones from ``reference`` into
+   ``os_sensor`` with the latest transform (seed: ``Time(0)``).
+2. ``in_view``: cones within ``max_range``, ahead of ``min_x``, and between
+   ``min_boundary_offset`` and ``max_boundary_offset`` from the global path
+   (others are false positives, not boundary cones); then, once the track's
+   width and middle in view are estimated, not more than ``boundary_tolerance``
+   inside their boundary line (``bridges.estimate_track``).
+3. ``virtual_partners``, ``delaunay_edges``, ``find_bridges`` (``bridges``):
+   Delaunay on all cones, the checked left-right bridges and their midpoints.
+4. ``ordered_midpoints`` (``ordering``): the used bridges' midpoints from the
+   nearest one in front, chaining nearest neighbours.
+5. ``fit_path`` (``spline``): B-spline through them, resampled every 0.5 m.
+6. ``check_path``: at least two midpoints, at least ``min_path_length`` long,
+   starting within ``max_start_distance``, and crossing no boundary edge.
+7. ``speed_profile``: the waypoint speeds.
+
+When step 6 fails, ``carry_path_forward`` moves the previous plan's path into
+the current frame through the frame tree (old ``os_sensor`` at the old stamp
+-> ``reference`` -> ``os_sensor`` now), drops what lies behind the car, and the
+plan reports ``PlanStatus.FALLBACK`` with the reason; with nothing to carry
+forward it is ``PlanStatus.FAILED`` with an empty path.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import StrEnum
+
+import numpy as np
+from numpy.typing import NDArray
+
+from localization.frames import LATEST, Buffer, TransformError
+from localization.messages import FRAME_OS_SENSOR, Header
+from planner.bridges import (
+    Bridges,
+    ConeSet,
+    PairTable,
+    TrackEstimate,
+    boundary_edges,
+    delaunay_edges,
+    estimate_track,
+    find_bridges,
+    pair_table,
+    virtual_partners,
+)
+from planner.classify import LEFT, RIGHT, ClassifiedCones
+from planner.config import MidlineConfig, SpeedProfileConfig
+from planner.geometry import FloatArray, arc_length, segments_cross
+from planner.messages import BridgeLines, LocalPath, Midpoints, Waypoints
+from planner.ordering import ordered_midpoints
+from planner.speed_profile import speed_profile
+from planner.spline import fit_path
+
+
+class PlanStatus(StrEnum):
+    """Outcome of one planning step."""
+
+    OK = "ok"
+    FALLBACK = "fallback"  # the previous path, carried into the current frame
+    FAILED = "failed"  # no path at all
+
+
+@dataclass(frozen=True, slots=True)
+class LocalPlan:
+    """Everything one planning step produced, in ``os_sensor`` at ``header.stamp``.
+
+    Attributes:
+        header: the transform's stamp and the sensor frame.
+        cones: real cones in view followed by their virtual partners.
+        bridges: the left-right Delaunay edges with their checks.
+        midpoints: (k, 2) ordered midpoints the path goes through [m].
+        path: (p, 2) the path, every ``spacing`` of arc length [m].
+        speeds: (p,) target speed at each path point [m/s].
+        status: ok, fallback or failed.
+        reason: why the fresh path was not sound ("" when ok).
+        track: the width and middle of the track in view.
+        dropped: cones left out of view or as false positives.
+    """
+
+    header: Header
+    cones: ConeSet
+    bridges: Bridges
+    midpoints: FloatArray
+    path: FloatArray
+    speeds: FloatArray
+    status: PlanStatus
+    reason: str
+    track: TrackEstimate
+    dropped: int
+
+    @property
+    def fallback(self) -> bool:
+        """True when the path is the previous one carried forward."""
+        return self.status is PlanStatus.FALLBACK
+
+    @property
+    def left(self) -> FloatArray:
+        """(a, 2) real left cones in view [m]."""
+        return self.cones.points[(self.cones.side == LEFT) & ~self.cones.virtual]
+
+    @property
+    def right(self) -> FloatArray:
+        """(b, 2) real right cones in view [m]."""
+        return self.cones.points[(self.cones.side == RIGHT) & ~self.cones.virtual]
+
+    @property
+    def virtual(self) -> FloatArray:
+        """(v, 2) virtual partners [m]."""
+        return self.cones.points[self.cones.virtual]
+
+    @property
+    def bridge_lines(self) -> FloatArray:
+        """(m, 2, 2) every left-right Delaunay edge, [left end, right end] [m]."""
+        pts = self.cones.points
+        return np.stack([pts[self.bridges.left], pts[self.bridges.right]], axis=1)
+
+    def local_path(self) -> LocalPath:
+        """``/local_planned_path``."""
+        d = np.diff(self.path, axis=0)
+        yaw = np.arctan2(d[:, 1], d[:, 0]) if len(d) else np.zeros(0)
+        yaw = np.concatenate([yaw, yaw[-1:]]) if len(yaw) else np.zeros(len(self.path))
+        return LocalPath(self.header, self.path, yaw)
+
+    def waypoints(self) -> Waypoints:
+        """``/final_waypoints`` and ``/waypoint_speed_bars``."""
+        return Waypoints(self.header, self.path, self.speeds)
+
+    def bridge_message(self) -> BridgeLines:
+        """``/delaunay_internal_lines``."""
+        return BridgeLines(self.header, self.bridge_lines, self.bridges.used)
+
+    def midpoint_message(self) -> Midpoints:
+        """``/delaunay_internal_midpoints``."""
+        return Midpoints(self.header, self.midpoints)
+
+
+def cones_to_sensor(
+    cones: ClassifiedCones, buffer: Buffer, time: float, sensor_frame: str
+) -> tuple[ConeSet, float]:
+    """Step 1: the classified cones in ``sensor_frame``; also the stamp used [s]."""
+    transform = buffer.lookup_transform(sensor_frame, cones.header.frame_id, time)
+    points = transform.transform_points(cones.points)
+    tangent = transform.transform_points(cones.points + cones.tangent) - points
+    cone_set = ConeSet(
+        points=points,
+        side=cones.side,
+        offset=cones.offset,
+        station=cones.station,
+        tangent=tangent,
+        virtual=np.zeros(len(points), dtype=bool),
+        axis=cones.axis,
+    )
+    return cone_set, transform.stamp
+
+
+def in_view(cones: ConeSet, config: MidlineConfig) -> NDArray[np.bool_]:
+    """Step 2a: (n,) mask of the cones in range and at a boundary's distance from the path."""
+    x, y = cones.points[:, 0], cones.points[:, 1]
+    return (
+        (x >= config.min_x)
+        & (np.hypot(x, y) <= config.max_range)
+        & (np.abs(cones.offset) >= config.min_boundary_offset)
+        & (np.abs(cones.offset) <= config.max_boundary_offset)
+    )
+
+
+def boundary_cones(
+    cones: ConeSet, config: MidlineConfig
+) -> tuple[ConeSet, PairTable, TrackEstimate, int]:
+    """Step 2: the cones that may bound the track, their pair table and the track estimate.
+
+    Returns:
+        The kept cones, their pair table, the width and middle in view, and
+        how many cones were dropped.
+    """
+    real = cones.select(in_view(cones, config))
+    pairs = pair_table(real, config)
+    track = estimate_track(pairs, config)
+    if track.measured:
+        on_boundary = track.boundary_offset(real) >= -config.boundary_tolerance
+        if not np.all(on_boundary):
+            real = real.select(on_boundary)
+            pairs = pair_table(real, config)
+    return real, pairs, track, len(cones) - len(real)
+
+
+def check_path(
+    path: FloatArray, n_midpoints: int, boundary: FloatArray, config: MidlineConfig
+) -> str:
+    """Step 6: why the path is not sound, or "" when it is.
+
+    Args:
+        path: (p, 2) the fitted path [m].
+        n_midpoints: ordered midpoints it was fitted through.
+        boundary: (e, 2, 2) boundary edges it may not cross [m].
+        config: the thresholds.
+    """
+    if n_midpoints < 2:
+        return f"{n_midpoints} ordered midpoints (need 2)"
+    length = float(arc_length(path)[-1])
+    if length < config.min_path_length:
+        return f"path {length:.2f} m long (need {config.min_path_length} m)"
+    start = float(np.hypot(*path[0]))
+    if start > config.max_start_distance:
+        return f"path starts {start:.2f} m away (max {config.max_start_distance} m)"
+    if len(boundary) and np.any(
+        segments_cross(path[:-1], path[1:], boundary[:, 0], boundary[:, 1])
+    ):
+        return "path crosses a track boundary"
+    return ""
+
+
+def carry_path_forward(
+    previous: LocalPlan | None,
+    buffer: Buffer,
+    time: float,
+    reference_frame: str,
+    sensor_frame: str,
+) -> FloatArray | None:
+    """The previous plan's path in ``sensor_frame`` at ``time``, from its nearest point on.
+
+    Through the frame tree: ``previous.header.frame_id`` at the previous stamp
+    -> ``reference_frame`` -> ``sensor_frame`` at ``time``. None when there is
+    no previous path, the frame tree cannot transform it (e.g. the old stamp
+    left the cache), or fewer than two points remain.
+    """
+    if previous is None or len(previous.path) < 2:
+        return None
+    try:
+        in_reference = buffer.transform_points(
+            reference_frame, previous.header.frame_id, previous.path, previous.header.stamp
+        )
+        moved = buffer.transform_points(sensor_frame, reference_frame, in_reference, time)
+    except TransformError:
+        return None
+    nearest = int(np.argmin(np.hypot(moved[:, 0], moved[:, 1])))
+    moved = moved[nearest:]
+    return moved if len(moved) >= 2 else None
+
+
+def reference_path_planning(
+    cones: ClassifiedCones,
+    buffer: Buffer,
+    config: MidlineConfig | None = None,
+    speed_config: SpeedProfileConfig | None = None,
+    *,
+    v_start: float | None = None,
+    previous: LocalPlan | None = None,
+    time: float = LATEST,
+    sensor_frame: str = FRAME_OS_SENSOR,
+) -> LocalPlan:
+    """Plan the local path between the classified cones, in ``sensor_frame``.
+
+    Args:
+        cones: left and right cones in ``reference`` (``classify_cones_by_side``).
+        buffer: the frame tree.
+        config: midline settings.
+        speed_config: speed profile limits.
+        v_start: current speed, the profile's start [m/s]; None leaves it free.
+        previous: the last plan, carried forward when this one is not sound.
+        time: lookup time [s]; :data:`LATEST` as in the seed.
+        sensor_frame: the frame the path is planned in.
+
+    Returns:
+        The plan with every intermediate.
+
+    Raises:
+        The frame tree's errors when ``cones`` cannot be mapped at ``time``.
+    """
+    config = config or MidlineConfig()
+    all_cones, stamp = cones_to_sensor(cones, buffer, time, sensor_frame)
+    real, pairs, track, dropped = boundary_cones(all_cones, config)
+    cone_set = real.join(virtual_partners(real, pairs, config, track))
+    edges = delaunay_edges(cone_set.points)
+    bridges = find_bridges(cone_set, edges, config, track)
+    midpoints = ordered_midpoints(bridges, cones.sensor_station, cones.axis, config)
+    path = fit_path(midpoints, config)
+    boundary = cone_set.points[boundary_edges(cone_set, edges, config)]
+    reason = check_path(path, len(midpoints), boundary, config)
+    status = PlanStatus.OK
+    if reason:
+        carried = carry_path_forward(previous, buffer, stamp, cones.header.frame_id, sensor_frame)
+        status = PlanStatus.FAILED if carried is None else PlanStatus.FALLBACK
+        path = np.zeros((0, 2)) if carried is None else carried
+    return LocalPlan(
+        header=Header(stamp, sensor_frame),
+        cones=cone_set,
+        bridges=bridges,
+        midpoints=midpoints,
+        path=path,
+        speeds=speed_profile(path, speed_config, v_start),
+        status=status,
+        reason=reason,
+        track=track,
+        dropped=dropped,
+    )

@@ -1,0 +1,112 @@
+"""Pure pursuit on the local path: steering from the bicycle geometry about the rear axle.
+
+For a target point at distance L_d from the rear axle, seen at angle alpha
+from the car's heading, the circle through the rear axle tangent to the
+heading and through the target has curvature ``kappa = 2 sin(alpha) / L_d``
+(Coulter 1992). A kinematic bicycle of wheelbase L follows it with the front
+wheel angle::
+
+    delta = atan(L * kappa) = atan(2 L sin(alpha) / L_d)
+
+clipped to +-max_steer. The lookahead distance grows with speed,
+``L_d = clip(lookahead_min + lookahead_gain * v, lookahead_min, lookahead_max)``,
+and the target is where the path leaves the circle of radius L_d about the
+rear axle, searching forward from the path point nearest the axle
+(interpolated on the segment that crosses the circle). When the whole path
+lies inside the circle, the target is its last point; when it starts outside,
+its first point. Either way the formula uses the target's actual distance.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.config import PurePursuitConfig
+from planner.geometry import FloatArray
+
+
+@dataclass(frozen=True, slots=True)
+class SteeringResult:
+    """One pure-pursuit step.
+
+    Attributes:
+        steering: front wheel angle, + left, within the limits [rad].
+        target: (2,) lookahead point in the path's frame [m].
+        index: index of the path point at or after the target.
+        alpha: angle of the target from the heading, seen from the rear axle [rad].
+        distance: distance from the rear axle to the target [m].
+        lookahead: the lookahead distance asked for [m].
+    """
+
+    steering: float
+    target: FloatArray
+    index: int
+    alpha: float
+    distance: float
+    lookahead: float
+
+
+def lookahead_distance(speed: float, config: PurePursuitConfig) -> float:
+    """L_d = clip(lookahead_min + lookahead_gain * |v|, min, max) [m] for speed v [m/s]."""
+    raw = config.lookahead_min + config.lookahead_gain * abs(speed)
+    return min(max(raw, config.lookahead_min), config.lookahead_max)
+
+
+def find_lookahead_point(
+    path: FloatArray, centre: FloatArray, distance: float
+) -> tuple[FloatArray, int]:
+    """Where the (n, 2) path leaves the circle of ``distance`` [m] about ``centre`` (2,).
+
+    Returns:
+        The target point (2,) and the index of the first path point at or
+        beyond it.
+    """
+    d = np.hypot(path[:, 0] - centre[0], path[:, 1] - centre[1])
+    nearest = int(np.argmin(d))
+    beyond = np.flatnonzero(d[nearest:] >= distance)
+    if len(beyond) == 0:
+        return path[-1].copy(), len(path) - 1
+    i = nearest + int(beyond[0])
+    if i == nearest:
+        return path[i].copy(), i
+    a, b = path[i - 1] - centre, path[i] - centre
+    seg = b - a
+    # |a + t seg| = distance, the root in [0, 1] (a inside, b outside).
+    qa = float(seg @ seg)
+    qb = 2.0 * float(a @ seg)
+    qc = float(a @ a) - distance**2
+    t = (-qb + math.sqrt(max(qb * qb - 4.0 * qa * qc, 0.0))) / (2.0 * qa)
+    return path[i - 1] + min(max(t, 0.0), 1.0) * seg, i
+
+
+def pure_pursuit_angle(target: FloatArray, wheelbase: float) -> tuple[float, float, float]:
+    """delta = atan(2 L sin(alpha) / L_d) for a target (2,) in the rear-axle frame.
+
+    Returns:
+        (delta [rad] unclipped, alpha [rad], L_d [m]).
+    """
+    x, y = float(target[0]), float(target[1])
+    distance = math.hypot(x, y)
+    if distance == 0.0:
+        return 0.0, 0.0, 0.0
+    alpha = math.atan2(y, x)
+    return math.atan(2.0 * wheelbase * math.sin(alpha) / distance), alpha, distance
+
+
+def pure_pursuit(path: FloatArray, speed: float, config: PurePursuitConfig) -> SteeringResult:
+    """Steer toward the lookahead point of a path (n, 2) in the vehicle's frame [m].
+
+    Args:
+        path: the local path in ``os_sensor`` (x forward, y left), n >= 1.
+        speed: current speed [m/s].
+        config: geometry, limits and lookahead law.
+    """
+    axle = np.array([config.rear_axle_x, 0.0])
+    lookahead = lookahead_distance(speed, config)
+    target, index = find_lookahead_point(path, axle, lookahead)
+    delta, alpha, distance = pure_pursuit_angle(target - axle, config.wheelbase)
+    steering = min(max(delta, -config.max_steer), config.max_steer)
+    return SteeringResult(steering, target, index, alpha, distance, lookahead)

@@ -1,0 +1,90 @@
+"""Longitudinal control: PI on the speed error with the profile's acceleration fed forward.
+
+At each control step, with target speed v_ref, the profile's planned
+acceleration a_ff there, and measured speed v::
+
+    e     = v_ref - v
+    I     = clip(I + e dt, -integral_limit, integral_limit)   (not while saturated
+                                                               in the direction of e)
+    a_cmd = clip(feed_forward * a_ff + kp e + ki I, -max_decel, max_accel)
+
+``target_on_path`` reads v_ref and a_ff off the waypoints: at the arc length
+of the path point nearest the rear axle plus a preview of
+max(preview_min, preview_time * v), where a_ff = (v_{i+1}^2 - v_i^2) / (2 ds),
+the acceleration the profile's forward and backward passes planned.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner.config import SpeedControlConfig
+from planner.geometry import FloatArray, arc_length
+
+
+def target_on_path(
+    path: FloatArray,
+    speeds: FloatArray,
+    centre: FloatArray,
+    speed: float,
+    config: SpeedControlConfig,
+) -> tuple[float, float]:
+    """Target speed [m/s] and planned acceleration [m/s^2] a preview ahead of ``centre``.
+
+    Args:
+        path: (n, 2) waypoints [m], n >= 1.
+        speeds: (n,) their target speeds [m/s].
+        centre: (2,) the rear axle in the path's frame [m].
+        speed: current speed [m/s].
+        config: preview settings.
+    """
+    if len(path) == 1:
+        return float(speeds[0]), 0.0
+    s = arc_length(path)
+    nearest = int(np.argmin(np.hypot(path[:, 0] - centre[0], path[:, 1] - centre[1])))
+    preview = max(config.preview_min, config.preview_time * abs(speed))
+    at = min(float(s[nearest]) + preview, float(s[-1]))
+    v_ref = float(np.interp(at, s, speeds))
+    i = min(int(np.searchsorted(s, at, side="right")) - 1, len(s) - 2)
+    ds = float(s[i + 1] - s[i])
+    a_ff = float(speeds[i + 1] ** 2 - speeds[i] ** 2) / (2.0 * ds) if ds > 0.0 else 0.0
+    return v_ref, a_ff
+
+
+class SpeedController:
+    """PI speed controller with feed-forward and anti-windup (module docstring).
+
+    Args:
+        config: gains and limits.
+
+    Attributes:
+        integral: the integrated speed error [m].
+    """
+
+    def __init__(self, config: SpeedControlConfig | None = None) -> None:
+        self.config = config or SpeedControlConfig()
+        self.integral = 0.0
+
+    def reset(self) -> None:
+        """Forget the integrated error."""
+        self.integral = 0.0
+
+    def step(self, v_ref: float, speed: float, dt: float, a_ff: float = 0.0) -> float:
+        """One control step: the acceleration command [m/s^2].
+
+        Args:
+            v_ref: target speed [m/s].
+            speed: measured speed [m/s].
+            dt: time since the last step [s].
+            a_ff: planned acceleration to feed forward [m/s^2].
+        """
+        c = self.config
+        error = v_ref - speed
+        base = c.feed_forward * a_ff + c.kp * error
+        saturated_up = base + c.ki * self.integral >= c.max_accel and error > 0.0
+        saturated_down = base + c.ki * self.integral <= -c.max_decel and error < 0.0
+        if not (saturated_up or saturated_down):
+            limit = c.integral_limit
+            self.integral = min(max(self.integral + error * dt, -limit), limit)
+        command = base + c.ki * self.integral
+        return min(max(command, -c.max_decel), c.max_accel)

@@ -1,0 +1,85 @@
+"""The speed profile along the local path: curvature limit, drive and brake passes.
+
+For waypoints p_0..p_{n-1} at arc lengths s_i:
+
+1. ``menger_curvature``: kappa_i of the circle through p_{i-1}, p_i, p_{i+1}::
+
+       kappa = 2 cross(p_i - p_{i-1}, p_{i+1} - p_i)
+               / (|p_i - p_{i-1}| |p_{i+1} - p_i| |p_{i+1} - p_{i-1}|)
+
+   exactly 1/R for points on a circle of radius R (+ left turn); the end
+   points take their neighbour's value.
+2. ``curvature_limit``: v_i = min(v_max, sqrt(a_lat_max / |kappa_i|)).
+3. ``forward_pass`` (drive limit a_d, from the current speed v_start):
+   v_i^2 = min(v_i^2, v_{i-1}^2 + 2 a_d (s_i - s_{i-1})). Unrolled, this is
+   v_i^2 = min_{j<=i} (w_j + 2 a_d (s_i - s_j)) with w the squared limits, so
+   ``2 a_d s_i + cumulative_min(w_j - 2 a_d s_j)``: one numpy pass.
+4. ``backward_pass`` (brake limit a_b), the same from the end:
+   v_i^2 = min_{j>=i} (w_j + 2 a_b (s_j - s_i)). With ``horizon_stop`` the last
+   waypoint's speed is 0: the car can always stop on the path it has seen.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner.config import SpeedProfileConfig
+from planner.geometry import FloatArray, arc_length
+
+
+def menger_curvature(points: FloatArray) -> FloatArray:
+    """Signed curvature (n,) [1/m] of an (n, 2) polyline, + turning left."""
+    n = len(points)
+    if n < 3:
+        return np.zeros(n)
+    a, b, c = points[:-2], points[1:-1], points[2:]
+    ab, bc, ac = b - a, c - b, c - a
+    cross = ab[:, 0] * bc[:, 1] - ab[:, 1] * bc[:, 0]
+    denom = np.hypot(*ab.T) * np.hypot(*bc.T) * np.hypot(*ac.T)
+    inner = np.divide(2.0 * cross, denom, out=np.zeros(n - 2), where=denom > 0.0)
+    return np.concatenate([inner[:1], inner, inner[-1:]])
+
+
+def curvature_limit(kappa: FloatArray, config: SpeedProfileConfig) -> FloatArray:
+    """Step 2: min(v_max, sqrt(a_lat_max / |kappa|)) [m/s], shape of ``kappa``."""
+    k = np.abs(kappa)
+    floor = config.a_lat_max / config.v_max**2  # below this, v_max binds
+    return np.where(k > floor, np.sqrt(config.a_lat_max / np.maximum(k, floor)), config.v_max)
+
+
+def forward_pass(s: FloatArray, v_limit: FloatArray, a_drive: float) -> FloatArray:
+    """Step 3: speeds (n,) [m/s] reachable accelerating at most ``a_drive`` [m/s^2]."""
+    w = v_limit**2 - 2.0 * a_drive * s
+    return np.sqrt(np.maximum(2.0 * a_drive * s + np.minimum.accumulate(w), 0.0))
+
+
+def backward_pass(s: FloatArray, v_limit: FloatArray, a_brake: float) -> FloatArray:
+    """Step 4: speeds (n,) [m/s] from which braking at ``a_brake`` [m/s^2] meets the limits."""
+    w = (v_limit**2 + 2.0 * a_brake * s)[::-1]
+    return np.sqrt(np.maximum(np.minimum.accumulate(w)[::-1] - 2.0 * a_brake * s, 0.0))
+
+
+def speed_profile(
+    points: FloatArray,
+    config: SpeedProfileConfig | None = None,
+    v_start: float | None = None,
+) -> FloatArray:
+    """Target speed (n,) [m/s] at each waypoint of an (n, 2) path [m].
+
+    Args:
+        points: the waypoints, in driving order.
+        config: the limits.
+        v_start: speed at the first waypoint [m/s]; None leaves it free.
+    """
+    config = config or SpeedProfileConfig()
+    n = len(points)
+    if n == 0:
+        return np.zeros(0)
+    s = arc_length(points)
+    v = curvature_limit(menger_curvature(points), config)
+    if v_start is not None:
+        v[0] = min(v[0], max(v_start, 0.0))
+    v = forward_pass(s, v, config.a_drive)
+    if config.horizon_stop:
+        v[-1] = 0.0
+    return backward_pass(s, v, config.a_brake)

@@ -1,0 +1,62 @@
+"""Planner settings: construction from mappings, unknown keys, ranges."""
+
+from __future__ import annotations
+
+import pytest
+
+from planner import (
+    AutopilotConfig,
+    ClassifierConfig,
+    MidlineConfig,
+    PurePursuitConfig,
+    SpeedProfileConfig,
+)
+
+
+def test_unknown_key_lists_the_allowed_keys() -> None:
+    """An unknown key raises, naming itself and every allowed key."""
+    with pytest.raises(ValueError, match="unknown keys \\['a_lat'\\]") as info:
+        SpeedProfileConfig.from_dict({"a_lat": 5.0})
+    for key in ("a_lat_max", "a_drive", "a_brake", "v_max", "horizon_stop"):
+        assert key in str(info.value)
+
+
+def test_nested_mapping_builds_nested_settings() -> None:
+    """AutopilotConfig.from_dict turns nested mappings into the stage settings."""
+    config = AutopilotConfig.from_dict(
+        {
+            "control_rate": 100.0,
+            "pure_pursuit": {"wheelbase": 2.0},
+            "classifier": {"mode": "colour"},
+        }
+    )
+    assert config.control_rate == 100.0
+    assert config.pure_pursuit == PurePursuitConfig(wheelbase=2.0)
+    assert config.classifier.mode == "colour"
+    assert config.midline == MidlineConfig()
+
+
+def test_unknown_nested_key_raises() -> None:
+    """Unknown keys are caught at every level."""
+    with pytest.raises(ValueError, match="MidlineConfig: unknown keys \\['spline'\\]"):
+        AutopilotConfig.from_dict({"midline": {"spline": 3}})
+
+
+@pytest.mark.parametrize(
+    ("cls", "values"),
+    [
+        (SpeedProfileConfig, {"a_lat_max": 0.0}),
+        (SpeedProfileConfig, {"v_max": float("nan")}),
+        (MidlineConfig, {"max_track_width": 2.0}),  # below min_track_width
+        (MidlineConfig, {"spacing": -0.5}),
+        (MidlineConfig, {"bridge_selection": "some"}),
+        (PurePursuitConfig, {"lookahead_max": 1.0}),  # below lookahead_min
+        (ClassifierConfig, {"mode": "magic"}),
+        (ClassifierConfig, {"left_colours": ("blue",), "right_colours": ("blue",)}),
+        (AutopilotConfig, {"control_rate": 0.0}),
+    ],
+)
+def test_out_of_range_values_raise(cls: type, values: dict[str, object]) -> None:
+    """Values out of range raise ValueError when the settings are built."""
+    with pytest.raises(ValueError):
+        cls.from_dict(values)

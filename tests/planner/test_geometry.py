@@ -1,0 +1,96 @@
+"""Projection onto the global path, station arithmetic, segment crossings, resampling."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.testing import assert_allclose
+
+from localization.global_path import global_path_from_centreline
+from planner.geometry import (
+    PathProjector,
+    StationAxis,
+    resample_polyline,
+    segments_cross,
+)
+
+
+def brute_force(points: np.ndarray, xy: np.ndarray, closed: bool, allowed=None) -> np.ndarray:
+    """Distance to the nearest (allowed) segment, testing every segment."""
+    ring = np.vstack([xy, xy[:1]]) if closed else xy
+    a, d = ring[:-1], np.diff(ring, axis=0)
+    if allowed is not None:
+        a, d = a[allowed], d[allowed]
+    rel = points[:, None, :] - a[None]
+    t = np.clip(np.einsum("mki,ki->mk", rel, d) / np.einsum("ki,ki->k", d, d), 0.0, 1.0)
+    gap = rel - t[..., None] * d[None]
+    return np.sqrt(np.min(np.einsum("mki,mki->mk", gap, gap), axis=1))
+
+
+def test_seed_projection_on_one_segment() -> None:
+    """The seed's rule on (0,0)->(10,0): foot, station, signed offset and side, to 1e-8 m."""
+    path = global_path_from_centreline([[0.0, 0.0], [10.0, 0.0]], closed=False)
+    proj = PathProjector(path).project(np.array([[4.0, 2.0], [4.0, -1.0], [12.0, 1.0]]))
+    assert_allclose(proj.foot, [[4.0, 0.0], [4.0, 0.0], [10.0, 0.0]], atol=1e-8)
+    assert_allclose(proj.station, [4.0, 4.0, 10.0], atol=1e-8)
+    # + left; beyond the end the offset is still the distance from the segment's line.
+    assert_allclose(proj.offset, [2.0, -1.0, 1.0], atol=1e-8)
+    assert_allclose(proj.distance, [2.0, 1.0, math.hypot(2.0, 1.0)], atol=1e-8)
+    assert_allclose(proj.tangent, [[1.0, 0.0]] * 3, atol=1e-12)
+
+
+def test_projection_is_the_exact_nearest_segment() -> None:
+    """The k-d tree search finds the same nearest distance as testing every segment."""
+    rng = np.random.default_rng(0)
+    s = np.linspace(0.0, 2 * math.pi, 400, endpoint=False)
+    xy = np.column_stack([30 * np.cos(s) + 3 * np.cos(7 * s), 20 * np.sin(s)])
+    path = global_path_from_centreline(xy, closed=True)
+    projector = PathProjector(path)
+    points = xy[rng.integers(0, 400, 300)] + rng.normal(0.0, 4.0, (300, 2))
+    proj = projector.project(points)
+    assert_allclose(proj.distance, brute_force(points, path.xy, True), atol=1e-9)
+    assert_allclose(np.hypot(*(points - proj.foot).T), proj.distance, atol=1e-9)
+
+
+def test_windowed_projection_is_the_nearest_segment_in_the_window() -> None:
+    """With a station window, the nearest allowed segment, exactly; stations stay inside."""
+    rng = np.random.default_rng(0)
+    s = np.linspace(0.0, 2 * math.pi, 400, endpoint=False)
+    xy = np.column_stack([30 * np.cos(s), 20 * np.sin(s)])
+    path = global_path_from_centreline(xy, closed=True)
+    projector = PathProjector(path)
+    points = rng.uniform(-35.0, 35.0, (200, 2))
+    lo, hi = projector.length - 20.0, projector.length + 30.0  # wraps past the start
+    allowed = projector.window_mask(lo, hi)
+    proj = projector.project(points, (lo, hi))
+    assert_allclose(proj.distance, brute_force(points, path.xy, True, allowed), atol=1e-9)
+    ahead = projector.axis.difference(proj.station, 0.5 * (lo + hi))
+    longest = float(np.max(np.hypot(*path.segments[1].T)))  # a segment overlapping an edge
+    assert np.all(np.abs(ahead) <= 25.0 + longest)
+
+
+def test_station_difference_wraps_on_a_closed_path() -> None:
+    """Differences wrap into [-L/2, L/2) on a loop and not on an open path."""
+    assert_allclose(StationAxis(100.0, True).difference(np.array([1.0, 60.0]), 99.0), [2.0, -39.0])
+    assert_allclose(StationAxis(100.0, False).difference(1.0, 99.0), -98.0)
+
+
+def test_segments_cross() -> None:
+    """A proper X crosses; touching, collinear and disjoint segments do not."""
+    a0 = np.array([[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]])
+    a1 = np.array([[2.0, 2.0], [2.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
+    b0 = np.array([[0.0, 2.0]])
+    b1 = np.array([[2.0, 0.0]])
+    assert segments_cross(a0, a1, b0, b1)[:, 0].tolist() == [True, False, False, False]
+
+
+def test_resample_polyline_every_half_metre() -> None:
+    """An L of 3 m + 1.2 m gives points every 0.5 m of arc length, the end included."""
+    line = np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 1.2]])
+    out = resample_polyline(line, 0.5)
+    steps = np.hypot(*np.diff(out, axis=0).T)
+    assert len(out) == 10  # 0, 0.5, ..., 4.0 and the end at 4.2
+    assert_allclose(out[6], [3.0, 0.0])
+    assert_allclose(out[-1], [3.0, 1.2])
+    assert_allclose(steps[:-1][steps[:-1] > 0.49], 0.5)

@@ -1,0 +1,70 @@
+"""Pure pursuit: the bicycle geometry on circular paths, the lookahead law, limits."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from planner import PurePursuitConfig, lookahead_distance, pure_pursuit
+from planner.pure_pursuit import find_lookahead_point, pure_pursuit_angle
+
+CONFIG = PurePursuitConfig()  # L = 1.53 m, rear axle at x = -0.465 m in os_sensor
+
+
+def circle_through_axle(radius: float, left: bool = True) -> np.ndarray:
+    """A circle of ``radius`` through the rear axle, tangent to the heading, every ~1 cm."""
+    a = np.arange(0.0, math.pi, 0.01 / radius)
+    y = radius * (1.0 - np.cos(a))
+    return np.column_stack([CONFIG.rear_axle_x + radius * np.sin(a), y if left else -y])
+
+
+@pytest.mark.parametrize("radius", [6.0, 10.0, 25.0])
+@pytest.mark.parametrize("left", [True, False])
+@pytest.mark.parametrize("speed", [0.0, 8.0])
+def test_circle_gives_the_geometric_angle(radius: float, left: bool, speed: float) -> None:
+    """On a circle of R through the axle: delta = atan(2 L sin(alpha) / L_d) = atan(L / R)."""
+    result = pure_pursuit(circle_through_axle(radius, left), speed, CONFIG)
+    target = result.target - [CONFIG.rear_axle_x, 0.0]
+    alpha = math.atan2(target[1], target[0])
+    distance = math.hypot(*target)
+    expected = math.atan(2 * CONFIG.wheelbase * math.sin(alpha) / distance)
+    assert result.steering == pytest.approx(expected, abs=1e-12)
+    assert distance == pytest.approx(lookahead_distance(speed, CONFIG), abs=1e-9)
+    # A chord of the circle: alpha = asin(L_d / 2R), so delta = atan(L / R) (1 cm chords).
+    assert abs(result.steering) == pytest.approx(math.atan(CONFIG.wheelbase / radius), abs=1e-6)
+    assert math.copysign(1.0, result.steering) == (1.0 if left else -1.0)
+
+
+def test_lookahead_grows_with_speed_within_limits() -> None:
+    """L_d = 2 + 0.25 v, clipped to [2, 10] m."""
+    assert lookahead_distance(0.0, CONFIG) == 2.0
+    assert lookahead_distance(10.0, CONFIG) == pytest.approx(4.5)
+    assert lookahead_distance(50.0, CONFIG) == 10.0
+
+
+def test_steering_is_clipped() -> None:
+    """A target 90 degrees to the left asks for more than max_steer: clipped to 0.47 rad."""
+    path = np.array([[CONFIG.rear_axle_x, 0.0], [CONFIG.rear_axle_x, 3.0]])
+    result = pure_pursuit(path, 0.0, CONFIG)
+    assert pure_pursuit_angle(result.target - [CONFIG.rear_axle_x, 0.0], 1.53)[0] > 0.47
+    assert result.steering == CONFIG.max_steer
+
+
+def test_straight_path_ahead_steers_straight() -> None:
+    """A path along the x axis: zero steering, target L_d ahead of the axle."""
+    x = np.arange(0.0, 20.0, 0.5)
+    result = pure_pursuit(np.column_stack([x, np.zeros_like(x)]), 5.0, CONFIG)
+    assert result.steering == 0.0
+    assert_allclose(result.target, [CONFIG.rear_axle_x + 3.25, 0.0], atol=1e-12)
+
+
+def test_target_when_the_path_is_short_or_starts_far() -> None:
+    """All of the path inside the circle: its last point; all outside: its first point."""
+    centre = np.zeros(2)
+    short = np.array([[0.5, 0.0], [1.0, 0.5]])
+    far = np.array([[5.0, 1.0], [6.0, 1.0]])
+    assert_allclose(find_lookahead_point(short, centre, 3.0)[0], [1.0, 0.5])
+    assert_allclose(find_lookahead_point(far, centre, 3.0)[0], [5.0, 1.0])

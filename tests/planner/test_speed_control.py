@@ -1,0 +1,62 @@
+"""Longitudinal PI with feed-forward: convergence, ramp tracking, anti-windup, the target."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from planner import SpeedControlConfig, SpeedController, target_on_path
+
+DT = 0.02  # [s] 50 Hz
+
+
+def test_pi_converges_without_steady_state_error() -> None:
+    """Plant dv/dt = a - 0.1 v: v -> 10 m/s and the integral holds the drag, I = 0.1*10/ki = 2 m."""
+    controller = SpeedController(SpeedControlConfig(ki=0.5))
+    v = 0.0
+    for _ in range(int(40.0 / DT)):
+        a = controller.step(10.0, v, DT)
+        v += (a - 0.1 * v) * DT
+    assert v == pytest.approx(10.0, abs=1e-3)
+    assert controller.integral == pytest.approx(0.1 * 10.0 / 0.5, rel=1e-2)
+
+
+def test_feed_forward_tracks_a_ramp_exactly() -> None:
+    """Plant dv/dt = a, reference v = 2 t with a_ff = 2 m/s^2: the error stays zero."""
+    controller = SpeedController()
+    v = 0.0
+    for k in range(100):
+        a = controller.step(2.0 * k * DT, v, DT, a_ff=2.0)
+        v += a * DT
+    assert v == pytest.approx(2.0 * 100 * DT, abs=1e-12)
+    assert abs(controller.integral) < 1e-12
+
+
+def test_anti_windup_while_saturated() -> None:
+    """A 0 -> 20 m/s step saturates at 3 m/s^2 without winding up; overshoot < 0.5 m/s."""
+    controller = SpeedController()
+    v, peak = 0.0, 0.0
+    for _ in range(int(30.0 / DT)):
+        a = controller.step(20.0, v, DT)
+        assert -10.0 <= a <= 3.0
+        v += a * DT
+        peak = max(peak, v)
+    assert v == pytest.approx(20.0, abs=1e-3)
+    assert peak < 20.5
+
+
+def test_target_on_path_reads_the_preview() -> None:
+    """Straight path with v = s + 2: at rest the preview is 1 m (v_ref 3); at 10 m/s, 3 m (5)."""
+    s = np.arange(0.0, 20.5, 0.5)
+    path = np.column_stack([s, np.zeros_like(s)])
+    speeds = s + 2.0
+    v_ref, a_ff = target_on_path(path, speeds, np.zeros(2), 0.0, SpeedControlConfig())
+    assert v_ref == pytest.approx(3.0)
+    # a = (v1^2 - v0^2) / (2 ds) = ((3.5)^2 - 3^2) / 1.0 = 3.25 m/s^2 on the segment from s = 1 m.
+    assert a_ff == pytest.approx(3.25)
+    v_ref, _ = target_on_path(path, speeds, np.array([2.0, 0.3]), 10.0, SpeedControlConfig())
+    assert v_ref == pytest.approx(2.0 + 2.0 + 3.0)
+    assert_allclose(
+        target_on_path(path[:1], speeds[:1], np.zeros(2), 0.0, SpeedControlConfig()), (2.0, 0.0)
+    )

@@ -1,0 +1,91 @@
+"""Speed profile: v = sqrt(a_lat R) on circles, v^2 = 2 a s ramps, the vectorised passes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from planner import SpeedProfileConfig, speed_profile
+from planner.speed_profile import backward_pass, forward_pass, menger_curvature
+
+FREE = SpeedProfileConfig(v_max=100.0, horizon_stop=False)
+
+
+def arc(radius: float, length: float, step: float = 0.5, left: bool = True) -> np.ndarray:
+    """Points every ``step`` [m] on a circle of ``radius`` through the origin heading +x."""
+    a = np.arange(0.0, length, step) / radius
+    y = radius * (1.0 - np.cos(a))
+    return np.column_stack([radius * np.sin(a), y if left else -y])
+
+
+@pytest.mark.parametrize("radius", [5.0, 10.0, 40.0])
+def test_circle_speed_is_sqrt_a_lat_r(radius: float) -> None:
+    """On a circle: v = sqrt(a_lat_max R); R = 10 m, 6 m/s^2 gives 7.7460 m/s."""
+    v = speed_profile(arc(radius, 30.0), FREE)
+    assert_allclose(v, math.sqrt(6.0 * radius), rtol=1e-9)
+
+
+def test_menger_curvature_is_one_over_r_with_sign() -> None:
+    """Any three points on a circle give 1/R exactly; + for left turns."""
+    assert_allclose(menger_curvature(arc(8.0, 20.0)), 1.0 / 8.0, rtol=1e-9)
+    assert_allclose(menger_curvature(arc(8.0, 20.0, left=False)), -1.0 / 8.0, rtol=1e-9)
+    assert_allclose(menger_curvature(np.column_stack([np.arange(10.0), np.zeros(10)])), 0.0)
+
+
+def test_straight_from_standstill_and_the_cap() -> None:
+    """From rest: v = sqrt(2 a_drive s), 6 m/s at s = 6 m with 3 m/s^2, capped at v_max."""
+    config = SpeedProfileConfig(v_max=9.0, horizon_stop=False)
+    s = np.arange(0.0, 40.0, 0.5)
+    v = speed_profile(np.column_stack([s, np.zeros_like(s)]), config, v_start=0.0)
+    assert_allclose(v, np.minimum(np.sqrt(2 * 3.0 * s), 9.0), rtol=1e-12)
+    assert v[12] == pytest.approx(6.0)
+
+
+def test_horizon_stop_brakes_to_zero_at_the_end() -> None:
+    """With horizon_stop: v = sqrt(2 a_brake (L - s)) near the end; 6 m/s^2, 3 m left: 6 m/s."""
+    s = np.arange(0.0, 30.5, 0.5)
+    v = speed_profile(np.column_stack([s, np.zeros_like(s)]), SpeedProfileConfig())
+    assert v[-1] == 0.0
+    assert v[-7] == pytest.approx(6.0)
+    tail = s > 30.0 - 15.0**2 / (2 * 6.0)  # where braking from v_max = 15 m/s binds
+    assert_allclose(v[tail], np.sqrt(2 * 6.0 * (30.0 - s[tail])), rtol=1e-12)
+
+
+def test_braking_into_a_corner() -> None:
+    """50 m straight into R = 10 m: at x = -10 m, v = sqrt(6*10 + 2*6*10.49995) = 13.638 m/s.
+
+    The three-point curvature at the junction is 1/(2R); the full 1/R (and the
+    limit sqrt(60) m/s) starts at the first point inside the arc, 0.5 m in: the
+    car brakes at 6 m/s^2 over 10.5 m.
+    """
+    straight = np.column_stack([np.arange(-50.0, 0.0, 0.5), np.zeros(100)])
+    points = np.vstack([straight, arc(10.0, 20.0)])
+    v = speed_profile(points, FREE)
+    assert menger_curvature(points)[100] == pytest.approx(1.0 / 20.0, rel=1e-3)
+    distance = 10.0 + 2 * 10.0 * math.sin(0.025)  # to x = 0, then the 0.5 m arc's chord
+    assert v[80] == pytest.approx(math.sqrt(60.0 + 2 * 6.0 * distance), rel=1e-12)  # x = -10 m
+    assert_allclose(v[101:], math.sqrt(60.0), rtol=1e-9)
+
+
+def test_vectorised_passes_equal_the_sequential_loops() -> None:
+    """The cumulative-minimum passes equal the textbook loops on random limits."""
+    rng = np.random.default_rng(0)
+    s = np.cumsum(rng.uniform(0.1, 1.0, 200))
+    limit = rng.uniform(1.0, 20.0, 200)
+    fwd = limit.copy()
+    for i in range(1, 200):
+        fwd[i] = min(fwd[i], math.sqrt(fwd[i - 1] ** 2 + 2 * 3.0 * (s[i] - s[i - 1])))
+    bwd = fwd.copy()
+    for i in range(198, -1, -1):
+        bwd[i] = min(bwd[i], math.sqrt(bwd[i + 1] ** 2 + 2 * 6.0 * (s[i + 1] - s[i])))
+    assert_allclose(forward_pass(s, limit, 3.0), fwd, rtol=1e-9)
+    assert_allclose(backward_pass(s, forward_pass(s, limit, 3.0), 6.0), bwd, rtol=1e-9)
+
+
+def test_empty_and_single_point() -> None:
+    """Degenerate paths give empty or single speeds."""
+    assert speed_profile(np.zeros((0, 2))).shape == (0,)
+    assert speed_profile(np.zeros((1, 2)), FREE).tolist() == [100.0]
