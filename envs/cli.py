@@ -18,6 +18,7 @@ import json
 import sys
 from collections.abc import Sequence
 
+from envs.track_plot import save_track_picture
 from localization.geodesy import GeodesyError
 from localization.global_path import GlobalPathError, global_path_for_track
 from tracks import DEFAULT_TRACK, TrackFormatError, check_report, load_track, shipped_tracks
@@ -73,8 +74,6 @@ def cmd_tracks() -> int:
 
 def cmd_track_show(name: str, out: str) -> int:
     """Draw a track and its global path to a PNG."""
-    from envs.track_plot import save_track_picture
-
     if not out.lower().endswith(".png"):
         raise CliError(f"--out {out}: the picture is written as PNG, give a .png file name")
     track = load_track(name)

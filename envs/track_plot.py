@@ -10,17 +10,14 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import LineCollection
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")  # headless: never needs a display
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.axes import Axes  # noqa: E402
-from matplotlib.collections import LineCollection  # noqa: E402
-
-from localization.global_path import GlobalPath  # noqa: E402
-from tracks import ConeKind, Track  # noqa: E402
+from localization.global_path import GlobalPath
+from tracks import ConeKind, Track
 
 CONE_STYLE: dict[ConeKind, tuple[str, float]] = {
     ConeKind.BLUE: ("#1f4fd1", 14.0),
@@ -87,15 +84,22 @@ def save_track_picture(
         The path written.
     """
     target = Path(out)
-    fig, ax = plt.subplots(figsize=(9, 7), dpi=110)
-    try:
-        draw_track(ax, track, global_path)
-        ax.set_title(f"{track.name}: {track.length_m:.0f} m, {len(track.cones)} cones")
-        ax.legend(loc="upper left", fontsize=7, framealpha=0.8)
-        target.parent.mkdir(parents=True, exist_ok=True)
-        tmp = target.with_name(f".{target.name}.tmp.png")
-        fig.savefig(tmp, bbox_inches="tight")
-        os.replace(tmp, target)
-    finally:
-        plt.close(fig)
+    fig = Figure(figsize=(9, 7), dpi=110)  # no pyplot state: headless and re-entrant
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    draw_track(ax, track, global_path)
+    ax.set_title(f"{track.name}: {track.length_m:.0f} m, {len(track.cones)} cones")
+    ax.legend(loc="upper left", fontsize=7, framealpha=0.8)
+    save_figure(fig, target)
     return target
+
+
+def save_figure(fig: Figure, out: Path) -> None:
+    """Save ``fig`` as PNG at ``out`` atomically (temporary file + ``os.replace``)."""
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f".{out.name}.tmp.png")
+    try:
+        fig.savefig(tmp, bbox_inches="tight", format="png")
+        os.replace(tmp, out)
+    finally:
+        tmp.unlink(missing_ok=True)

@@ -1,0 +1,324 @@
+"""``conesim/ConeTrack-v0``: drive a Formula Student cone track.
+
+The env hosts the closed loop (``envs.stack.VehicleStack``: the pymunk world,
+its sensors, the EKF and the frame tree). An action sets the car's steering
+and acceleration for one control period; the world runs its physics substeps
+and sensors; localization takes every message; the env observes, scores and
+decides whether the episode is over.
+
+## Action Space
+``Box(-1, 1, (2,), float32)``: ``[steering, acceleration]``. Steering maps
+linearly to the front wheel angle within +-``max_steer`` (0.47 rad by
+default); acceleration maps to ``a * max_accel`` for ``a >= 0`` (3 m/s^2) and
+``a * max_decel`` below 0 (10 m/s^2). The steering actuator has a rate limit
+and a lag (``sim.vehicle_params``).
+
+## Observation Space
+See ``envs.observation``: in ``vector`` mode a float32 Box of
+``6 + 3 K`` values (estimated speed and yaw rate, the previous action, the
+EKF's 1-sigma position and heading uncertainty, then the K nearest detected
+cones in ``os_sensor`` as x, y, mask); ``dict`` mode adds colours, the
+estimated pose and its covariance.
+
+## Rewards
+A sum of named terms, each also in ``info["reward_terms"]``: ``progress``
+(metres of net progress along the true centreline), ``time`` (per second),
+``cone_hit`` (per cone touched), ``cone_doo`` (per cone down or out; FS
+charges 2 s), ``off_track`` (per excursion; FS charges 10 s), ``lap`` (per
+lap). Weights: ``envs.config.RewardWeights``.
+
+## Starting State
+The car stands still at the track's start pose (behind the start line), at
+t = 0, sensors and filter freshly reset with the episode seed.
+
+## Episode End
+Terminated when the requested laps are complete, when the car leaves the
+track (``terminate_off_track``) or is stuck (``terminate_stuck``); truncated
+at the time limit (``time_limit``; default 60 s per lap + 30 s) and by
+gymnasium's ``max_episode_steps``. ``info["end_reason"]`` says which.
+
+## Arguments
+``gymnasium.make("conesim/ConeTrack-v0", track="autocross", sensors="rtk",
+localization="fused", laps=1, control_rate=50, observation="vector",
+render_mode="rgb_array", ...)``; every ``envs.config.EnvConfig`` field. Unknown
+keys raise, listing the allowed ones. ``reset(options=...)`` takes ``track``,
+``sensors``, ``localization`` and ``start_pose`` ((x, y, yaw) of the CG).
+
+## Version History
+* v0: first release.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from typing import Any, SupportsFloat
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+from envs.config import EnvConfig
+from envs.observation import SensorMemory, build_observation, observation_space
+from envs.render import Renderer, Scene
+from envs.stack import VehicleStack
+from localization.frames import LATEST, TransformError
+from localization.messages import Message
+from localization.pose import Pose2D
+from sim.world import WorldConfig
+from tracks import Track, load_track
+
+ObsType = NDArray[np.float32] | dict[str, NDArray[np.float32]]
+RESET_OPTIONS = ("track", "sensors", "localization", "start_pose")
+
+
+class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
+    """A car on a cone track with noisy sensors and EKF localization (see the module docs)."""
+
+    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 20}  # noqa: RUF012
+
+    def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
+        self.config = EnvConfig.from_dict(kwargs)
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode {render_mode!r}; allowed: {self.metadata['render_modes']}"
+            )
+        self.render_mode = render_mode
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
+        self.observation_space = observation_space(self.config.max_cones, self.config.observation)
+        self._track_cache: dict[str, Track] = {}
+        self._settings = (self.config.track, self.config.sensors, self.config.localization)
+        self.stack = self._build_stack(0, *self._settings)
+        self.overlay: Any = None  # an object with planner intermediates, for drawing
+        self._renderer: Renderer | None = None
+        self._action = np.zeros(2, dtype=np.float32)
+        self._memory = SensorMemory()
+        self.last_messages: list[Message] = []
+
+    # -- gymnasium API -----------------------------------------------------------------------
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[ObsType, dict[str, Any]]:
+        """Start an episode; ``options`` may pick the track, sensors, localization, start."""
+        super().reset(seed=seed)
+        options = dict(options or {})
+        unknown = sorted(set(options) - set(RESET_OPTIONS))
+        if unknown:
+            raise ValueError(f"reset options {unknown} unknown; allowed: {list(RESET_OPTIONS)}")
+        track = options.get("track", self._settings[0])
+        sensors = options.get("sensors", self._settings[1])
+        localization = options.get("localization", self._settings[2])
+        EnvConfig(track=track, sensors=sensors, localization=localization)  # validates
+        episode_seed = int(self.np_random.integers(0, 2**31 - 1))
+        start = options.get("start_pose")
+        start_pose = None if start is None else Pose2D(*(float(v) for v in start))
+        if (track, sensors, localization) != self._settings:
+            self._settings = (track, sensors, localization)
+        self.stack = self._build_stack(episode_seed, *self._settings, start_pose)
+        self._action = np.zeros(2, dtype=np.float32)
+        self._memory = SensorMemory()
+        self._memory.update(self.stack.initial_messages)
+        self.last_messages = list(self.stack.initial_messages)
+        self._counts = self._score_counts()
+        if self.render_mode == "human":
+            self.render()
+        return self._observe(), self._info({}, "")
+
+    def step(
+        self, action: NDArray[np.float32]
+    ) -> tuple[ObsType, SupportsFloat, bool, bool, dict[str, Any]]:
+        """Apply an action for one control period (``physics_rate / control_rate`` steps)."""
+        # 1. act
+        act = np.asarray(action, dtype=np.float32).reshape(2)
+        if not np.all(np.isfinite(act)):
+            raise ValueError(f"action must be finite, got {action!r}")
+        self._action = np.clip(act, -1.0, 1.0)
+        steer, accel = self.action_to_command(self._action)
+        self.stack.world.set_command(steer, accel)
+        # 2. simulate
+        self.last_messages = self.stack.run_physics_steps(self.config.substeps)
+        self._memory.update(self.last_messages)
+        # 3. observe
+        obs = self._observe()
+        # 4. reward terms
+        terms = self._reward_terms()
+        reward = float(sum(terms.values()))
+        # 5. terminated / truncated
+        terminated, truncated, reason = self._episode_end()
+        info = self._info(terms, reason)
+        if self.render_mode == "human":
+            self.render()
+        return obs, reward, terminated, truncated, info
+
+    def render(self) -> NDArray[np.uint8] | None:
+        """``rgb_array``: the frame; ``human``: show it in a window."""
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode to make()")
+            return None
+        if self._renderer is None:
+            self._renderer = Renderer(self.stack.global_path)
+        frame = self._renderer.rgb_array(self.scene())
+        if self.render_mode == "human":
+            self._renderer.show(frame, self.metadata["render_fps"])
+            return None
+        return frame
+
+    def close(self) -> None:
+        """Close the render window, if any."""
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    # -- pieces ------------------------------------------------------------------------------
+
+    def action_to_command(self, action: NDArray[np.float32]) -> tuple[float, float]:
+        """Map an action in [-1, 1]^2 to (steering [rad], acceleration [m/s^2])."""
+        p = self.stack.world_config.vehicle
+        a = float(action[1])
+        return float(action[0]) * p.max_steer, a * (p.max_accel if a >= 0 else p.max_decel)
+
+    def command_to_action(self, steer: float, accel: float) -> NDArray[np.float32]:
+        """Inverse of :meth:`action_to_command`, clipped to the action space."""
+        p = self.stack.world_config.vehicle
+        a = accel / p.max_accel if accel >= 0 else accel / p.max_decel
+        return np.clip(np.array([steer / p.max_steer, a], dtype=np.float32), -1.0, 1.0)
+
+    def _build_stack(
+        self,
+        seed: int,
+        track_name: str,
+        sensors: str,
+        localization: str,
+        start_pose: Pose2D | None = None,
+    ) -> VehicleStack:
+        if track_name not in self._track_cache:
+            self._track_cache[track_name] = load_track(track_name)
+        world_config = WorldConfig(physics_rate=self.config.physics_rate, sensors=sensors)
+        return VehicleStack(
+            self._track_cache[track_name], world_config, localization, seed, start_pose
+        )
+
+    def _observe(self) -> ObsType:
+        return build_observation(
+            self._memory,
+            self.stack.estimate(),
+            self._action,
+            self.config.max_cones,
+            self.config.observation,
+        )
+
+    def _score_counts(self) -> dict[str, float]:
+        world = self.stack.world
+        race = world.race_state
+        return {
+            "progress": race.progress_m,
+            "time": world.time,
+            "cone_hit": float(len(world.cones.hit_ids)),
+            "cone_doo": float(len(world.cones.doo_ids)),
+            "off_track": float(len(race.off_track)),
+            "lap": float(race.laps_completed),
+        }
+
+    def _reward_terms(self) -> dict[str, float]:
+        counts = self._score_counts()
+        w = self.config.rewards
+        weights = {
+            "progress": w.progress,
+            "time": w.time,
+            "cone_hit": w.cone_hit,
+            "cone_doo": w.cone_doo,
+            "off_track": w.off_track,
+            "lap": w.lap,
+        }
+        terms = {k: weights[k] * (counts[k] - self._counts[k]) for k in weights}
+        self._counts = counts
+        return terms
+
+    def _episode_end(self) -> tuple[bool, bool, str]:
+        world = self.stack.world
+        race = world.race_state
+        cfg = self.config
+        if race.laps_completed >= cfg.laps:
+            return True, False, "laps_completed"
+        if cfg.terminate_off_track and race.off_track:
+            return True, False, "off_track"
+        if cfg.terminate_stuck and race.stuck:
+            return True, False, "stuck"
+        if world.time >= cfg.episode_time_limit - 1e-9:
+            return False, True, "time_limit"
+        return False, False, ""
+
+    def _info(self, terms: dict[str, float], reason: str) -> dict[str, Any]:
+        world = self.stack.world
+        race = world.race_state
+        state = world.state
+        antenna = state.antenna_pose()
+        info: dict[str, Any] = {
+            "t": world.time,
+            "reward_terms": terms,
+            "end_reason": reason,
+            "laps_completed": race.laps_completed,
+            "lap_times": list(race.lap_times),
+            "progress_m": race.progress_m,
+            "cones_hit": len(world.cones.hit_ids),
+            "cones_down_or_out": len(world.cones.doo_ids),
+            "off_track_events": len(race.off_track),
+            "truth": {
+                "x": antenna.x,
+                "y": antenna.y,
+                "yaw": antenna.yaw,
+                "speed": state.speed,
+                "steer": state.steer,
+            },
+            "messages": self.last_messages,
+        }
+        est = self.stack.estimate()
+        if est is not None:
+            info["localization_error"] = {
+                "position_m": math.hypot(est.pose.x - antenna.x, est.pose.y - antenna.y),
+                "yaw_rad": abs(math.remainder(est.pose.yaw - antenna.yaw, 2 * math.pi)),
+            }
+        return info
+
+    def scene(self) -> Scene:
+        """What a frame shows now (truth, estimate, detections, planner overlay)."""
+        world = self.stack.world
+        p = world.config.vehicle
+        est = self.stack.estimate()
+        scene = Scene(
+            cones=np.asarray(world.cones.positions),
+            kinds=world.cones.kinds,
+            car=world.state.pose,
+            car_length=p.length,
+            car_width=p.width,
+            t=world.time,
+            speed=world.state.speed,
+            laps=world.race_state.laps_completed,
+        )
+        if est is not None:
+            scene.estimate = est.pose
+            scene.covariance = np.asarray(est.pose_covariance)[:2, :2]
+        det = self._memory.detections
+        buffer = self.stack.buffer
+        if det is not None and len(det):
+            with contextlib.suppress(TransformError):
+                scene.detections = buffer.transform_points(
+                    "reference", "os_sensor", np.asarray(det.points[:, :2]), LATEST
+                )
+        ap = self.overlay
+        if ap is not None:
+            scene.left = np.asarray(ap.left_cones)
+            scene.right = np.asarray(ap.right_cones)
+            path_ref = np.asarray(getattr(ap, "path_reference", np.zeros((0, 2))))
+            scene.path = path_ref
+            plan = getattr(ap, "plan", None)
+            if plan is not None and len(plan.speeds) == len(path_ref):
+                scene.speeds = np.asarray(plan.speeds)
+            look = ap.lookahead_point
+            if look is not None:
+                with contextlib.suppress(TransformError):
+                    scene.lookahead = buffer.transform_points(
+                        "reference", "os_sensor", np.asarray(look).reshape(1, 2), LATEST
+                    )[0]
+        return scene

@@ -1,0 +1,139 @@
+"""The env's observation: the estimated ego state and the K nearest detected cones.
+
+Vector mode (float32, shape ``(6 + 3 K,)``)::
+
+    [speed, yaw_rate, steer_cmd, accel_cmd, pos_std, yaw_std,
+     x_1, y_1, m_1, ..., x_K, y_K, m_K]
+
+* ``speed`` [m/s] and ``yaw_rate`` [rad/s]: the EKF estimate in ``fused`` mode,
+  otherwise the last wheel-speed and gyro messages (what the car measures);
+* ``steer_cmd``, ``accel_cmd``: the previous action, in [-1, 1];
+* ``pos_std`` [m], ``yaw_std`` [rad]: the EKF's 1-sigma uncertainty (0 when
+  no filter runs);
+* ``x_i, y_i`` [m]: the latest cone detection in ``os_sensor``, nearest first
+  (the seed's ``/sorted_cones_time``), ``m_i`` = 1 for a real entry and 0 for
+  padding (padded entries are zero).
+
+Dict mode adds the colours (one-hot over ``CONE_COLOURS``), the estimated pose
+in ``reference`` and its 3x3 covariance. Every value is clipped into the
+space's bounds so ``observation_space.contains(obs)`` always holds.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+from localization.ekf import Estimate
+from localization.messages import CONE_COLOURS, ConeDetections, Imu, Message, WheelSpeed
+
+EGO_SIZE = 6
+EGO_LOW = np.array([-5.0, -10.0, -1.0, -1.0, 0.0, 0.0], dtype=np.float32)
+EGO_HIGH = np.array([60.0, 10.0, 1.0, 1.0, 1e3, math.pi], dtype=np.float32)
+CONE_BOUND = 100.0  # [m] beyond any detector's range
+POSE_BOUND = 1e5  # [m]
+
+
+def observation_space(max_cones: int, mode: str) -> spaces.Space[Any]:
+    """The Box (vector) or Dict (dict) observation space."""
+    cone_low = np.tile(np.array([-CONE_BOUND, -CONE_BOUND, 0.0], np.float32), max_cones)
+    cone_high = np.tile(np.array([CONE_BOUND, CONE_BOUND, 1.0], np.float32), max_cones)
+    if mode == "vector":
+        return spaces.Box(
+            np.concatenate([EGO_LOW, cone_low]),
+            np.concatenate([EGO_HIGH, cone_high]),
+            dtype=np.float32,
+        )
+    return spaces.Dict(
+        {
+            "ego": spaces.Box(EGO_LOW, EGO_HIGH, dtype=np.float32),
+            "cones": spaces.Box(-CONE_BOUND, CONE_BOUND, (max_cones, 2), dtype=np.float32),
+            "cone_mask": spaces.Box(0.0, 1.0, (max_cones,), dtype=np.float32),
+            "cone_colours": spaces.Box(0.0, 1.0, (max_cones, len(CONE_COLOURS)), dtype=np.float32),
+            "pose": spaces.Box(
+                np.array([-POSE_BOUND, -POSE_BOUND, -math.pi], np.float32),
+                np.array([POSE_BOUND, POSE_BOUND, math.pi], np.float32),
+                dtype=np.float32,
+            ),
+            "pose_covariance": spaces.Box(-1e6, 1e6, (3, 3), dtype=np.float32),
+        }
+    )
+
+
+@dataclass
+class SensorMemory:
+    """The latest message of each kind the observation is built from."""
+
+    detections: ConeDetections | None = None
+    wheel_speed: float = 0.0
+    yaw_rate: float = 0.0
+
+    def update(self, messages: list[Message]) -> None:
+        """Keep the newest detection, wheel speed and gyro reading (finite ones)."""
+        for msg in messages:
+            if isinstance(msg, ConeDetections):
+                self.detections = msg
+            elif isinstance(msg, WheelSpeed) and math.isfinite(msg.speed):
+                self.wheel_speed = msg.speed
+            elif isinstance(msg, Imu) and math.isfinite(msg.yaw_rate):
+                self.yaw_rate = msg.yaw_rate
+
+
+def build_observation(
+    memory: SensorMemory,
+    estimate: Estimate | None,
+    action: NDArray[np.float32],
+    max_cones: int,
+    mode: str,
+) -> NDArray[np.float32] | dict[str, NDArray[np.float32]]:
+    """The observation for the current step (see the module docstring)."""
+    if estimate is not None:
+        speed, yaw_rate = estimate.speed, estimate.yaw_rate
+        cov = estimate.pose_covariance
+        pos_std = math.sqrt(max(0.0, float(cov[0, 0] + cov[1, 1])))
+        yaw_std = math.sqrt(max(0.0, float(cov[2, 2])))
+    else:
+        speed, yaw_rate, pos_std, yaw_std = memory.wheel_speed, memory.yaw_rate, 0.0, 0.0
+    ego = np.clip(
+        np.array([speed, yaw_rate, action[0], action[1], pos_std, yaw_std], dtype=np.float32),
+        EGO_LOW,
+        EGO_HIGH,
+    )
+    cones = np.zeros((max_cones, 2), dtype=np.float32)
+    mask = np.zeros(max_cones, dtype=np.float32)
+    colours = np.zeros((max_cones, len(CONE_COLOURS)), dtype=np.float32)
+    det = memory.detections
+    if det is not None and len(det):
+        pts = np.asarray(det.points[:, :2], dtype=float)
+        finite = np.all(np.isfinite(pts), axis=1)
+        rows = np.flatnonzero(finite)[:max_cones]
+        n = len(rows)
+        cones[:n] = np.clip(pts[rows], -CONE_BOUND, CONE_BOUND)
+        mask[:n] = 1.0
+        if det.colours is not None:
+            for k, row in enumerate(rows):
+                colours[k, CONE_COLOURS.index(det.colours[row])] = 1.0
+    if mode == "vector":
+        flat = np.column_stack([cones, mask]).ravel()
+        return np.concatenate([ego, flat]).astype(np.float32)
+    if estimate is not None:
+        pose = np.array([estimate.pose.x, estimate.pose.y, estimate.pose.yaw], dtype=np.float32)
+        pose_cov = np.asarray(estimate.pose_covariance, dtype=np.float32)
+    else:
+        pose = np.zeros(3, dtype=np.float32)
+        pose_cov = np.zeros((3, 3), dtype=np.float32)
+    return {
+        "ego": ego,
+        "cones": cones,
+        "cone_mask": mask,
+        "cone_colours": colours,
+        "pose": np.clip(
+            pose, [-POSE_BOUND, -POSE_BOUND, -math.pi], [POSE_BOUND, POSE_BOUND, math.pi]
+        ).astype(np.float32),
+        "pose_covariance": np.clip(pose_cov, -1e6, 1e6).astype(np.float32),
+    }

@@ -1,0 +1,209 @@
+"""Drawing the seed's RViz picture in 2D: the env's ``rgb_array`` and ``human`` modes.
+
+What is drawn (``Scene``): the cones by kind (where they are now: knocked
+cones move), the global path coloured by covariance status, the car's true
+footprint, the EKF estimate with its 2-sigma covariance ellipse, the latest
+detections placed with the estimated pose, the left/right classification, the
+planned path, the waypoints with speed bars and the lookahead point.
+
+``rgb_array`` renders with matplotlib's Agg canvas (no display needed);
+``human`` shows the same frames in a pygame window (the ``render`` extra:
+``pip install "conesim[render]"``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.patches import Ellipse, Polygon
+from numpy.typing import NDArray
+
+from envs.track_plot import CONE_STYLE, draw_global_path
+from localization.global_path import GlobalPath
+from localization.pose import Pose2D
+from tracks import ConeKind
+
+FloatArray = NDArray[np.float64]
+
+
+def _empty() -> FloatArray:
+    return np.zeros((0, 2))
+
+
+@dataclass
+class Scene:
+    """Everything one frame shows; arrays are in ``reference`` [m]."""
+
+    cones: FloatArray
+    kinds: tuple[str, ...]
+    car: Pose2D
+    car_length: float
+    car_width: float
+    t: float = 0.0
+    speed: float = 0.0
+    laps: int = 0
+    estimate: Pose2D | None = None
+    covariance: FloatArray | None = None  # (2, 2) position covariance [m^2]
+    detections: FloatArray = field(default_factory=_empty)
+    left: FloatArray = field(default_factory=_empty)
+    right: FloatArray = field(default_factory=_empty)
+    path: FloatArray = field(default_factory=_empty)
+    speeds: FloatArray = field(default_factory=lambda: np.zeros(0))
+    lookahead: FloatArray | None = None
+
+
+class Renderer:
+    """Renders scenes to RGB arrays, centred on the car.
+
+    Args:
+        global_path: drawn under everything.
+        size: image width and height [px].
+        view: side of the square view [m].
+    """
+
+    def __init__(self, global_path: GlobalPath, size: int = 480, view: float = 40.0) -> None:
+        self.global_path = global_path
+        self.size = size
+        self.view = view
+        self._window: Any = None
+        self._clock: Any = None
+
+    def rgb_array(self, scene: Scene) -> NDArray[np.uint8]:
+        """The frame as a (size, size, 3) uint8 array."""
+        dpi = 100
+        # A bare Figure on an Agg canvas: no pyplot state, no display needed.
+        fig = Figure(figsize=(self.size / dpi, self.size / dpi), dpi=dpi)
+        canvas = FigureCanvasAgg(fig)
+        ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
+        self._draw(ax, scene)
+        canvas.draw()
+        return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
+
+    def _draw(self, ax: Axes, sc: Scene) -> None:
+        half = 0.5 * self.view
+        ax.set_xlim(sc.car.x - half, sc.car.x + half)
+        ax.set_ylim(sc.car.y - half, sc.car.y + half)
+        ax.set_aspect("equal")
+        ax.set_facecolor("#e8e8e8")
+        ax.set_xticks([])
+        ax.set_yticks([])
+        draw_global_path(ax, self.global_path)
+        kinds = np.array(sc.kinds)
+        for kind, (colour, size) in CONE_STYLE.items():
+            mask = kinds == str(kind)
+            if mask.any():
+                ax.scatter(
+                    sc.cones[mask][:, 0],
+                    sc.cones[mask][:, 1],
+                    s=size * 2,
+                    c=colour,
+                    edgecolors="k",
+                    linewidths=0.4,
+                )
+        if len(sc.left):
+            ax.scatter(
+                sc.left[:, 0],
+                sc.left[:, 1],
+                s=90,
+                facecolors="none",
+                edgecolors=CONE_STYLE[ConeKind.BLUE][0],
+            )
+        if len(sc.right):
+            ax.scatter(
+                sc.right[:, 0],
+                sc.right[:, 1],
+                s=90,
+                facecolors="none",
+                edgecolors=CONE_STYLE[ConeKind.YELLOW][0],
+            )
+        if len(sc.detections):
+            ax.scatter(
+                sc.detections[:, 0],
+                sc.detections[:, 1],
+                s=12,
+                marker="x",
+                c="#444444",
+                linewidths=0.8,
+            )
+        if len(sc.path) > 1:
+            ax.plot(*sc.path.T, color="#c000c0", lw=1.5)
+            ax.scatter(sc.path[:, 0], sc.path[:, 1], s=4, c="#c000c0")
+            self._speed_bars(ax, sc)
+        if sc.lookahead is not None:
+            ax.scatter(sc.lookahead[0], sc.lookahead[1], s=40, marker="*", c="#c000c0")
+        self._car(ax, sc)
+        ax.text(
+            0.02, 0.98,
+            f"t {sc.t:6.2f} s   v {sc.speed:5.2f} m/s   laps {sc.laps}",
+            transform=ax.transAxes, va="top", fontsize=8, family="monospace",
+        )  # fmt: skip
+
+    def _speed_bars(self, ax: Axes, sc: Scene) -> None:
+        # Waypoint speed bars (the seed's /waypoint_speed_bars, seen from above):
+        # a bar normal to the path whose length is the speed at 0.1 m per m/s.
+        if len(sc.speeds) != len(sc.path):
+            return
+        d = np.gradient(sc.path, axis=0)
+        n = np.column_stack([-d[:, 1], d[:, 0]])
+        n /= np.maximum(np.hypot(*n.T), 1e-9)[:, None]
+        tips = sc.path + n * (0.1 * sc.speeds)[:, None]
+        for a, b in zip(sc.path[::2], tips[::2], strict=True):
+            ax.plot([a[0], b[0]], [a[1], b[1]], color="#2ca02c", lw=1.0, alpha=0.6)
+
+    def _car(self, ax: Axes, sc: Scene) -> None:
+        hl, hw = 0.5 * sc.car_length, 0.5 * sc.car_width
+        corners = sc.car.transform_points([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
+        ax.add_patch(Polygon(corners, closed=True, fc="#d62728", ec="k", alpha=0.8))
+        if sc.estimate is not None:
+            est = sc.estimate
+            ax.plot(
+                [est.x, est.x + 1.5 * math.cos(est.yaw)],
+                [est.y, est.y + 1.5 * math.sin(est.yaw)],
+                color="#1f77b4", lw=2,
+            )  # fmt: skip
+            if sc.covariance is not None and np.all(np.isfinite(sc.covariance)):
+                vals, vecs = np.linalg.eigh(sc.covariance)
+                vals = np.maximum(vals, 0.0)
+                angle = math.degrees(math.atan2(vecs[1, 1], vecs[0, 1]))
+                width, height = 2 * 2 * math.sqrt(vals[1]), 2 * 2 * math.sqrt(vals[0])
+                ax.add_patch(
+                    Ellipse((est.x, est.y), max(width, 0.05), max(height, 0.05), angle=angle,
+                            fc="none", ec="#1f77b4", lw=1.2)
+                )  # fmt: skip
+
+    def show(self, frame: NDArray[np.uint8], fps: float) -> None:
+        """Show a frame in a pygame window (``human`` mode)."""
+        try:
+            import pygame  # noqa: PLC0415
+        except ImportError as exc:
+            from gymnasium.error import DependencyNotInstalled  # noqa: PLC0415
+
+            raise DependencyNotInstalled(
+                'pygame is not installed; install the render extra: pip install "conesim[render]"'
+            ) from exc
+        if self._window is None:
+            pygame.init()
+            pygame.display.init()
+            self._window = pygame.display.set_mode((frame.shape[1], frame.shape[0]))
+            pygame.display.set_caption("conesim")
+            self._clock = pygame.time.Clock()
+        surface = pygame.surfarray.make_surface(np.transpose(frame, (1, 0, 2)))
+        self._window.blit(surface, (0, 0))
+        pygame.event.pump()
+        pygame.display.flip()
+        self._clock.tick(fps)
+
+    def close(self) -> None:
+        """Close the window, if any."""
+        if self._window is not None:
+            import pygame  # noqa: PLC0415
+
+            pygame.display.quit()
+            pygame.quit()
+            self._window = None

@@ -1,0 +1,132 @@
+"""The vehicle stack the env hosts: world, localization and the frame tree.
+
+One control period of the closed loop (``VehicleStack.run_control_period``):
+
+for each physics substep (``physics_rate / control_rate`` of them):
+
+1. ``world.step()``: physics, cones, race control, sensors; the measurements
+   delivered at this step come back in stamp order;
+2. localization handles each message as the seed's nodes would:
+   ``/ublox_gps_node/fix`` -> ``gps_to_local_cartesian`` -> ``/local_xy``
+   (raw mode), ``/global_yaw``, IMU and wheel speed into the EKF (fused mode);
+3. the vehicle TF broadcaster publishes ``reference -> gps_antenna`` into the
+   buffer on its 20 Hz grid (``os_sensor`` is static, sent once).
+
+The stack never decides the actuator command: the env's action (or the
+autopilot policy acting through it) does.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from localization.broadcaster import BroadcasterConfig, BroadcastMode, VehicleTfBroadcaster
+from localization.ekf import PROFILES as EKF_PROFILES
+from localization.ekf import Estimate, FusionEkf, for_profile
+from localization.frames import Buffer
+from localization.global_path import GlobalPath, global_path_for_track
+from localization.gps_to_local import GpsToLocalCartesian
+from localization.messages import HeadingStamped, Message, NavSatFix
+from localization.pose import Pose2D
+from sim.world import World, WorldConfig
+from tracks import Track
+
+LOCALIZATION_MODES = ("fused", "raw", "truth")
+
+
+@dataclass
+class StepRecord:
+    """What one control period produced.
+
+    Attributes:
+        messages: every measurement delivered in the period, in delivery order.
+        t: simulation time at its end [s].
+    """
+
+    messages: list[Message] = field(default_factory=list)
+    t: float = 0.0
+
+
+class VehicleStack:
+    """World + localization + frame tree for one car.
+
+    Args:
+        track: the track.
+        world_config: physics, sensors and vehicle settings.
+        localization: ``fused`` (EKF, default), ``raw`` (the seed's /local_xy +
+            /global_yaw) or ``truth``.
+        seed: episode seed.
+    """
+
+    def __init__(
+        self,
+        track: Track,
+        world_config: WorldConfig,
+        localization: str = "fused",
+        seed: int = 0,
+        start_pose: Pose2D | None = None,
+    ) -> None:
+        if localization not in LOCALIZATION_MODES:
+            raise ValueError(
+                f"unknown localization mode {localization!r}; allowed: {list(LOCALIZATION_MODES)}"
+            )
+        self.track = track
+        self.world_config = world_config
+        self.localization = localization
+        self.global_path: GlobalPath = global_path_for_track(track, world_config.origin)
+        self.start_pose = start_pose
+        self.initial_messages = self.reset(seed)
+
+    def reset(self, seed: int) -> list[Message]:
+        """New episode: world at t = 0, a fresh filter and frame tree.
+
+        Returns:
+            The measurements captured at t = 0 (already given to localization).
+        """
+        self.world = World(self.track, self.world_config, seed=seed, start_pose=self.start_pose)
+        first = self.world.reset(seed, self.start_pose)  # the t = 0 captures
+        self.buffer = Buffer()
+        profile = self.world_config.sensor_profile.name
+        self.ekf = FusionEkf(for_profile(profile if profile in EKF_PROFILES else "rtk"))
+        self.gps_to_local = GpsToLocalCartesian(self.world_config.origin)
+        mode = BroadcastMode(self.localization)
+        self.broadcaster = VehicleTfBroadcaster(
+            self.buffer,
+            BroadcasterConfig(mode=mode),
+            ekf=self.ekf if mode == BroadcastMode.FUSED else None,
+        )
+        self._handle(first)
+        self.broadcaster.step(0.0, self.world.state.antenna_pose())
+        return first
+
+    @property
+    def time(self) -> float:
+        """Simulation time [s]."""
+        return self.world.time
+
+    def run_physics_steps(self, n: int) -> list[Message]:
+        """Advance ``n`` physics steps with the held command; all deliveries, in order."""
+        out: list[Message] = []
+        for _ in range(n):
+            delivered = self.world.step()
+            self._handle(delivered)
+            self.broadcaster.step(self.world.time, self.world.state.antenna_pose())
+            out.extend(delivered)
+        return out
+
+    def _handle(self, messages: list[Message]) -> None:
+        for msg in messages:
+            if isinstance(msg, NavSatFix):
+                point = self.gps_to_local(msg)
+                if point is not None:
+                    self.broadcaster.on_local_xy(point)
+            elif isinstance(msg, HeadingStamped):
+                self.broadcaster.on_global_yaw(msg)
+            if self.localization == "fused":
+                self.ekf.process(msg)
+
+    def estimate(self) -> Estimate | None:
+        """The filter's estimate now (fused mode, once initialised), else None."""
+        if self.localization != "fused" or not self.ekf.initialised:
+            return None
+        return self.ekf.estimate(self.world.time)
