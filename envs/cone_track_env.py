@@ -32,7 +32,8 @@ The car stands still at the track's start pose (behind the start line), at
 t = 0, sensors and filter freshly reset with the episode seed.
 
 ## Episode End
-Terminated when the requested laps are complete, when the car leaves the
+Terminated when the requested laps are complete (an open lane such as
+acceleration is one run, whatever ``laps`` says), when the car leaves the
 track (``terminate_off_track``) or is stuck (``terminate_stuck``); truncated
 at the time limit (``time_limit``; default 60 s per lap + 30 s) and by
 gymnasium's ``max_episode_steps``. ``info["end_reason"]`` says which.
@@ -239,7 +240,7 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         world = self.stack.world
         race = world.race_state
         cfg = self.config
-        if race.laps_completed >= cfg.laps:
+        if race.laps_completed >= self.laps_to_drive:
             return True, False, "laps_completed"
         if cfg.terminate_off_track and race.off_track:
             return True, False, "off_track"
@@ -248,6 +249,11 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         if world.time >= cfg.episode_time_limit - 1e-9:
             return False, True, "time_limit"
         return False, False, ""
+
+    @property
+    def laps_to_drive(self) -> int:
+        """Laps that end the episode: ``laps``, or 1 on an open lane (one run)."""
+        return 1 if self.stack.track.layout == "open" else self.config.laps
 
     def _info(self, terms: dict[str, float], reason: str) -> dict[str, Any]:
         world = self.stack.world

@@ -1,0 +1,248 @@
+"""Headless scenario runs: the env, driven by the autopilot, measured.
+
+``run_scenario`` is what ``conesim run``, the lap-completion tests and the
+benchmarks call: one episode of ``ConeTrack-v0`` with the ``AutopilotPolicy``,
+recording what the result needs (trajectory, localization error at every
+broadcast, the planner's midline error, speeds) and returning a
+``RunResult`` whose ``to_json()`` is ``result.json``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from envs.autopilot_policy import AutopilotPolicy
+from envs.cone_track_env import ConeTrackEnv
+from envs.limit_lap import limit_lap_time
+from localization.frames import TransformError
+from sim.race_control import line_crossings_along
+from tracks import Track
+
+MIDLINE_SAMPLE_M = 0.05  # [m] spacing of the densified true centreline
+
+
+@dataclass
+class RunTrace:
+    """Per control step samples for the run picture."""
+
+    t: list[float] = field(default_factory=list)
+    x: list[float] = field(default_factory=list)
+    y: list[float] = field(default_factory=list)
+    speed: list[float] = field(default_factory=list)
+    target_speed: list[float] = field(default_factory=list)
+    loc_t: list[float] = field(default_factory=list)
+    loc_pos_err: list[float] = field(default_factory=list)
+    loc_yaw_err: list[float] = field(default_factory=list)
+
+
+@dataclass
+class RunResult:
+    """What a run reports (``result.json``)."""
+
+    track: str
+    seed: int
+    sensors: str
+    localization: str
+    laps: int
+    finished: bool
+    end_reason: str
+    laps_completed: int
+    lap_times_s: list[float]
+    best_lap_s: float | None
+    cones_hit: int
+    cones_down_or_out: int
+    off_track_events: int
+    sim_time_s: float
+    wall_time_s: float
+    real_time_factor: float
+    localization_pos_rmse_m: float | None
+    localization_yaw_rmse_deg: float | None
+    midline_rmse_m: float | None
+    planner_fallbacks: int
+    limit_lap_time_s: float
+    lap_time_ratio: float | None
+    trace: RunTrace = field(repr=False, default_factory=RunTrace)
+
+    def to_json(self) -> dict[str, Any]:
+        """The JSON-able result (the trace left out)."""
+        out = asdict(self)
+        out.pop("trace")
+        return out
+
+
+def timed_limit_lap(track: Track) -> float:
+    """The friction-limited lap time for the track's timed lap [s].
+
+    A loop: a flying lap of the centreline. The skidpad: one flying circle
+    (the centreline between its first two crossings of the timing line). An
+    open lane: from the start of the centreline to the finish line, standing.
+    """
+    centre = np.asarray(track.centreline)
+    if track.layout == "closed":
+        return limit_lap_time(centre, True)
+    finish = np.asarray(track.finish_line)
+    seg = np.hypot(*np.diff(centre, axis=0).T)
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    crossings = line_crossings_along(centre, False, finish)
+    if track.layout == "skidpad" and len(crossings) >= 2:
+        mask = (s >= crossings[0]) & (s < crossings[1])
+        return limit_lap_time(centre[mask], True)
+    end = crossings[0] if crossings else s[-1]
+    return limit_lap_time(centre[s <= end], False)
+
+
+def run_scenario(
+    track: str = "trackdrive",
+    *,
+    laps: int = 1,
+    seed: int = 0,
+    sensors: str = "rtk",
+    localization: str = "fused",
+    render: bool = False,
+    progress: Callable[[float, float], None] | None = None,
+    env_options: dict[str, Any] | None = None,
+) -> RunResult:
+    """Run one episode with the autopilot.
+
+    Args:
+        track: shipped track name or a track file.
+        laps: laps to drive.
+        seed: episode seed.
+        sensors: sensor profile.
+        localization: ``fused``, ``raw`` or ``truth``.
+        render: show a window (the ``render`` extra).
+        progress: called as ``progress(sim_time, time_limit)`` every control step.
+        env_options: further ``EnvConfig`` fields.
+    """
+    env = ConeTrackEnv(
+        render_mode="human" if render else None,
+        track=track,
+        laps=laps,
+        sensors=sensors,
+        localization=localization,
+        **(env_options or {}),
+    )
+    try:
+        return _drive(env, seed, progress)
+    finally:
+        env.close()
+
+
+def _drive(
+    env: ConeTrackEnv, seed: int, progress: Callable[[float, float], None] | None
+) -> RunResult:
+    cfg = env.config
+    wall0 = time.perf_counter()
+    _, info = env.reset(seed=seed)
+    policy = AutopilotPolicy(env)
+    action = policy.reset(info)
+    track = env.stack.track
+    centre_tree = _dense_centreline_tree(track)
+    trace = RunTrace()
+    midline_sq: list[float] = []
+    last_plan = None
+    limit = cfg.episode_time_limit
+    while True:
+        _, _, terminated, truncated, info = env.step(action)
+        action = policy(info)
+        _record(env, policy, trace)
+        plan = policy.autopilot.plan
+        if plan is not None and plan is not last_plan and len(policy.autopilot.path_reference):
+            dist, _ = centre_tree.query(policy.autopilot.path_reference)
+            midline_sq.extend((dist**2).tolist())
+            last_plan = plan
+        if progress is not None:
+            progress(env.stack.time, limit)
+        if terminated or truncated:
+            break
+    wall = time.perf_counter() - wall0
+    return _result(env, policy, info=info, trace=trace, midline_sq=midline_sq, wall=wall, seed=seed)
+
+
+def _dense_centreline_tree(track: Track) -> cKDTree:
+    centre = np.asarray(track.centreline)
+    if track.layout == "closed":
+        centre = np.vstack([centre, centre[:1]])
+    seg = np.hypot(*np.diff(centre, axis=0).T)
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    fine = np.arange(0.0, s[-1], MIDLINE_SAMPLE_M)
+    return cKDTree(
+        np.column_stack([np.interp(fine, s, centre[:, 0]), np.interp(fine, s, centre[:, 1])])
+    )
+
+
+def _record(env: ConeTrackEnv, policy: AutopilotPolicy, trace: RunTrace) -> None:
+    world = env.stack.world
+    t = world.time
+    state = world.state
+    trace.t.append(t)
+    trace.x.append(state.x)
+    trace.y.append(state.y)
+    trace.speed.append(state.speed)
+    trace.target_speed.append(policy.autopilot.target_speed)
+    # Localization error at broadcast instants: the pose the frame tree holds
+    # for ``t`` against the antenna's true pose at ``t`` (all three modes).
+    stamp = round(t * env.stack.broadcaster.config.rate)
+    if abs(t * env.stack.broadcaster.config.rate - stamp) > 1e-6:
+        return
+    try:
+        est = env.stack.buffer.lookup_pose2d("reference", "gps_antenna", t)
+    except TransformError:
+        return
+    truth = state.antenna_pose()
+    trace.loc_t.append(t)
+    trace.loc_pos_err.append(math.hypot(est.x - truth.x, est.y - truth.y))
+    trace.loc_yaw_err.append(abs(math.remainder(est.yaw - truth.yaw, 2 * math.pi)))
+
+
+def _rms(values: list[float]) -> float | None:
+    return float(math.sqrt(np.mean(np.square(values)))) if values else None
+
+
+def _result(
+    env: ConeTrackEnv,
+    policy: AutopilotPolicy,
+    *,
+    info: dict[str, Any],
+    trace: RunTrace,
+    midline_sq: list[float],
+    wall: float,
+    seed: int,
+) -> RunResult:
+    world = env.stack.world
+    lap_times = [float(v) for v in info["lap_times"]]
+    limit = timed_limit_lap(env.stack.track)
+    best = min(lap_times) if lap_times else None
+    yaw_rmse = _rms(trace.loc_yaw_err)
+    return RunResult(
+        track=env.stack.track.name,
+        seed=seed,
+        sensors=env.stack.world_config.sensor_profile.name,
+        localization=env.stack.localization,
+        laps=env.laps_to_drive,
+        finished=info["laps_completed"] >= env.laps_to_drive,
+        end_reason=info["end_reason"],
+        laps_completed=int(info["laps_completed"]),
+        lap_times_s=lap_times,
+        best_lap_s=best,
+        cones_hit=int(info["cones_hit"]),
+        cones_down_or_out=int(info["cones_down_or_out"]),
+        off_track_events=int(info["off_track_events"]),
+        sim_time_s=world.time,
+        wall_time_s=wall,
+        real_time_factor=world.time / wall if wall > 0 else math.inf,
+        localization_pos_rmse_m=_rms(trace.loc_pos_err),
+        localization_yaw_rmse_deg=None if yaw_rmse is None else math.degrees(yaw_rmse),
+        midline_rmse_m=float(math.sqrt(np.mean(midline_sq))) if midline_sq else None,
+        planner_fallbacks=policy.autopilot.fallback_count,
+        limit_lap_time_s=limit,
+        lap_time_ratio=None if best is None else best / limit,
+        trace=trace,
+    )
