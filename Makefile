@@ -14,13 +14,11 @@ $(STAMP): $(BIN)/python pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
-# What runs end to end today: the shipped tracks, the default track validated
-# against the FS rules, and its picture. (The closed-loop lap replaces this once
-# the simulator, localization and planner exist.)
+# A headless closed-loop lap on the default track (trackdrive): rtk sensors,
+# EKF localization, the seed's planner and pure pursuit. Prints the results and
+# writes runs/latest/result.json and runs/latest/run.png.
 run: $(STAMP)
-	$(BIN)/conesim tracks
-	$(BIN)/conesim track check trackdrive
-	$(BIN)/conesim track show trackdrive --out out/trackdrive.png
+	$(BIN)/conesim run --track trackdrive --laps 1 --out runs/latest
 
 # The whole test suite, then lint and type check.
 test: $(STAMP)

@@ -6,21 +6,31 @@ Subcommands:
 * ``conesim track show NAME|PATH --out FILE.png``: a picture of the cones by kind
   and the global path coloured by covariance status.
 * ``conesim track check NAME|PATH [--json]``: the Formula Student validator.
+* ``conesim run``: one headless closed-loop scenario (``envs.runner``): a
+  results table, ``DIR/result.json`` and ``DIR/run.png``.
 
-Exit codes: 0 success, 1 a check found errors, 2 bad input (one line on stderr
-naming the file and what is wrong; never a traceback).
+Exit codes: 0 success (``run``: every lap completed), 1 a check found errors
+or a run did not finish (off track, stuck, time limit), 2 bad input (one line
+on stderr naming the file and what is wrong; never a traceback).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import logging
 import sys
 from collections.abc import Sequence
+from pathlib import Path
+from typing import TextIO
 
+from envs.run_plot import save_run_picture
+from envs.runner import RunResult, run_scenario
+from envs.stack import LOCALIZATION_MODES
 from envs.track_plot import save_track_picture
 from localization.geodesy import GeodesyError
-from localization.global_path import GlobalPathError, global_path_for_track
+from localization.global_path import GlobalPathError, atomic_write_text, global_path_for_track
+from sim.sensors import PROFILES as SENSOR_PROFILES
 from tracks import DEFAULT_TRACK, TrackFormatError, check_report, load_track, shipped_tracks
 
 EXIT_OK = 0
@@ -40,6 +50,9 @@ def build_parser() -> argparse.ArgumentParser:
         prog="conesim",
         description="Closed-loop 2D simulator for Formula Student cone tracks.",
     )
+    parser.add_argument(
+        "-v", "--verbose", action="store_true", help="log the nodes' warnings (rejected messages)"
+    )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     sub.add_parser("tracks", help="list the shipped tracks with length, cones and width range")
@@ -52,6 +65,16 @@ def build_parser() -> argparse.ArgumentParser:
     check = track_sub.add_parser("check", help="validate against Formula Student rules")
     check.add_argument("track", help="shipped track name or a track file")
     check.add_argument("--json", action="store_true", help="print one JSON object")
+
+    run = sub.add_parser("run", help="run one headless closed-loop scenario with the autopilot")
+    run.add_argument("--track", default=DEFAULT_TRACK, help="shipped track name or a track file")
+    run.add_argument("--laps", type=int, default=1, help="laps to drive (default 1)")
+    run.add_argument("--seed", type=int, default=0, help="episode seed (default 0)")
+    run.add_argument("--sensors", default="rtk", choices=list(SENSOR_PROFILES))
+    run.add_argument("--localization", default="fused", choices=list(LOCALIZATION_MODES))
+    run.add_argument("--out", default="runs/latest", help="output directory (default runs/latest)")
+    run.add_argument("--render", action="store_true", help="show a window (render extra)")
+    run.add_argument("--json", action="store_true", help="print result.json to stdout")
     return parser
 
 
@@ -107,9 +130,105 @@ def cmd_track_check(name: str, as_json: bool) -> int:
     return EXIT_FAILED if report["errors"] else EXIT_OK
 
 
+def cmd_run(args: argparse.Namespace) -> int:
+    """Run one scenario; write result.json and run.png; print the results."""
+    if args.laps < 1:
+        raise CliError(f"--laps {args.laps}: must be at least 1")
+    track = load_track(args.track)  # bad input fails here, before anything is written
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise CliError(f"--out {out}: exists and is not a directory")
+    bar = ProgressBar(sys.stderr) if sys.stderr.isatty() and not args.json else None
+    result = run_scenario(
+        args.track,
+        laps=args.laps,
+        seed=args.seed,
+        sensors=args.sensors,
+        localization=args.localization,
+        render=args.render,
+        progress=bar.update if bar else None,
+    )
+    if bar:
+        bar.close()
+    payload = json.dumps(result.to_json(), indent=2)
+    atomic_write_text(out / "result.json", payload + "\n")
+    save_run_picture(result, track, global_path_for_track(track), out / "run.png")
+    if args.json:
+        print(payload)
+    else:
+        print(format_result(result, out))
+    return EXIT_OK if result.finished else EXIT_FAILED
+
+
+def format_result(result: RunResult, out: Path) -> str:
+    """The results table ``conesim run`` prints."""
+
+    def num(value: float | None, fmt: str) -> str:
+        return "n/a" if value is None else format(value, fmt)
+
+    laps = ", ".join(f"{t:.2f}" for t in result.lap_times_s) or "none"
+    rows = [
+        (
+            "track",
+            f"{result.track} ({result.sensors} sensors, {result.localization} "
+            f"localization, seed {result.seed})",
+        ),
+        ("finished", f"{'yes' if result.finished else 'no'} ({result.end_reason})"),
+        ("laps", f"{result.laps_completed}/{result.laps}: {laps} s"),
+        (
+            "limit lap",
+            f"{result.limit_lap_time_s:.2f} s (best lap x{num(result.lap_time_ratio, '.2f')})",
+        ),
+        ("cones hit / DOO", f"{result.cones_hit} / {result.cones_down_or_out}"),
+        ("off-track events", str(result.off_track_events)),
+        (
+            "localization RMSE",
+            f"{num(result.localization_pos_rmse_m, '.3f')} m, "
+            f"{num(result.localization_yaw_rmse_deg, '.3f')} deg",
+        ),
+        ("midline RMSE", f"{num(result.midline_rmse_m, '.3f')} m"),
+        ("planner fallbacks", str(result.planner_fallbacks)),
+        (
+            "sim / wall time",
+            f"{result.sim_time_s:.2f} s / {result.wall_time_s:.2f} s "
+            f"({result.real_time_factor:.1f}x real time)",
+        ),
+        ("written", f"{out / 'result.json'}, {out / 'run.png'}"),
+    ]
+    width = max(len(k) for k, _ in rows)
+    return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
+
+
+class ProgressBar:
+    """A one-line progress bar on a terminal (simulated time against the limit)."""
+
+    def __init__(self, stream: TextIO, width: int = 30) -> None:
+        self.stream = stream
+        self.width = width
+        self._shown = -1
+
+    def update(self, t: float, limit: float) -> None:
+        """Redraw when the bar moves."""
+        filled = min(self.width, int(self.width * t / limit)) if limit > 0 else 0
+        if filled != self._shown:
+            self._shown = filled
+            bar = "#" * filled + "." * (self.width - filled)
+            self.stream.write(f"\rconesim run [{bar}] {t:6.1f} s simulated")
+            self.stream.flush()
+
+    def close(self) -> None:
+        """End the line."""
+        self.stream.write("\n")
+        self.stream.flush()
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``conesim`` console script."""
     args = build_parser().parse_args(argv)
+    logging.basicConfig(
+        level=logging.WARNING if args.verbose else logging.ERROR,
+        format="conesim: %(name)s: %(message)s",
+    )
     try:
         if args.command == "tracks":
             return cmd_tracks()
@@ -117,6 +236,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return cmd_track_show(args.track, args.out)
         if args.command == "track" and args.track_command == "check":
             return cmd_track_check(args.track, args.json)
+        if args.command == "run":
+            return cmd_run(args)
     except (*INPUT_ERRORS, CliError) as exc:
         print(f"conesim: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
