@@ -308,9 +308,9 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         det = self._memory.detections
         buffer = self.stack.buffer
         if det is not None and len(det):
-            with contextlib.suppress(TransformError):
+            with contextlib.suppress(TransformError):  # placed with the pose at capture
                 scene.detections = buffer.transform_points(
-                    "reference", "os_sensor", np.asarray(det.points[:, :2]), LATEST
+                    "reference", "os_sensor", np.asarray(det.points[:, :2]), det.header.stamp
                 )
         ap = self.overlay
         if ap is not None:

@@ -1,0 +1,136 @@
+"""Tests for the ConeTrack-v0 env: gymnasium's checks, determinism, vector envs."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+from numpy.testing import assert_allclose
+
+import envs
+from envs.cone_track_env import ConeTrackEnv
+from envs.config import EnvConfig
+
+
+def test_registered_and_made_with_one_import() -> None:
+    """gym.make finds conesim/ConeTrack-v0 after `import envs`, with max_episode_steps."""
+    env = gym.make(envs.ENV_ID)
+    assert env.spec is not None
+    assert env.spec.max_episode_steps == envs.DEFAULT_MAX_EPISODE_STEPS
+    env.close()
+
+
+@pytest.mark.parametrize("observation", ["vector", "dict"])
+def test_gymnasium_check_env_with_render(observation: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """gymnasium's env checker passes, render checks of both modes included."""
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")  # `human` mode without a display
+    monkeypatch.setenv("SDL_AUDIODRIVER", "dummy")
+    env = gym.make(envs.ENV_ID, render_mode="rgb_array", observation=observation, time_limit=2.0)
+    check_env(env.unwrapped, skip_render_check=False)
+    env.reset(seed=0)
+    frame = env.render()
+    assert frame is not None and frame.shape == (480, 480, 3) and frame.dtype == np.uint8
+    env.close()
+
+
+def rollout(seed: int, steps: int = 150) -> list[tuple[bytes, float, str]]:
+    """Observations, rewards and info summaries of a fixed-action rollout."""
+    env = ConeTrackEnv()
+    obs, info = env.reset(seed=seed)
+    out = [(obs.tobytes(), 0.0, repr(info["truth"]))]
+    for k in range(steps):
+        action = np.array([0.3 * math.sin(k / 20), 0.5], dtype=np.float32)
+        obs, reward, _, _, info = env.step(action)
+        terms = repr(sorted(info["reward_terms"].items()))
+        out.append((obs.tobytes(), float(reward), repr(info["truth"]) + terms))
+    return out
+
+
+def test_same_seed_same_rollout_bit_for_bit() -> None:
+    """The same seed gives identical observations, rewards and infos; another seed differs."""
+    a, b, c = rollout(5), rollout(5), rollout(6)
+    assert a == b
+    assert a != c
+
+
+def test_action_mapping_to_vehicle_limits() -> None:
+    """[1, 1] is full left lock and +3 m/s^2; [-1, -1] full right and -10 m/s^2."""
+    env = ConeTrackEnv()
+    assert_allclose(env.action_to_command(np.array([1.0, 1.0])), (0.47, 3.0))
+    assert_allclose(env.action_to_command(np.array([-1.0, -1.0])), (-0.47, -10.0))
+    assert_allclose(env.command_to_action(0.235, -5.0), [0.5, -0.5])
+    with pytest.raises(ValueError, match="finite"):
+        env.step(np.array([np.nan, 0.0], dtype=np.float32))
+
+
+def test_reward_terms_sum_and_progress() -> None:
+    """Driving straight ahead: progress ~ distance, time term -dt per step, sum is the reward."""
+    env = ConeTrackEnv(sensors="ideal")
+    env.reset(seed=0)
+    total_progress = 0.0
+    for _ in range(50):
+        _, reward, _, _, info = env.step(np.array([0.0, 1.0], dtype=np.float32))
+        terms = info["reward_terms"]
+        assert reward == pytest.approx(sum(terms.values()))
+        assert terms["time"] == pytest.approx(-0.02)
+        total_progress += terms["progress"]
+    # 1 s at 3 m/s^2 from rest: 1.5 m (the kinematic start loses a little).
+    assert total_progress == pytest.approx(1.5, rel=0.05)
+
+
+def test_off_track_terminates_with_penalty() -> None:
+    """Full lock into the infield ends the episode as off_track with its penalty."""
+    env = ConeTrackEnv(sensors="ideal")
+    env.reset(seed=0)
+    for _ in range(1000):
+        _, _, terminated, truncated, info = env.step(np.array([1.0, 0.6], dtype=np.float32))
+        if terminated or truncated:
+            break
+    assert terminated and info["end_reason"] == "off_track"
+    assert info["reward_terms"]["off_track"] == -100.0
+
+
+def test_reset_options_and_bad_config() -> None:
+    """reset(options) switches track; unknown keys and values are refused with the allowed list."""
+    env = ConeTrackEnv()
+    env.reset(seed=1, options={"track": "skidpad", "sensors": "ideal"})
+    assert env.stack.track.name == "skidpad"
+    with pytest.raises(ValueError, match="allowed"):
+        env.reset(options={"weather": "rain"})
+    with pytest.raises(ValueError, match="allowed keys"):
+        ConeTrackEnv(wind=3)
+    with pytest.raises(ValueError, match="allowed"):
+        ConeTrackEnv(sensors="lidar9000")
+    with pytest.raises(ValueError, match="whole multiple"):
+        EnvConfig(control_rate=30.0)
+
+
+def test_time_limit_truncates() -> None:
+    """A 1 s limit truncates after 50 steps at 50 Hz."""
+    env = ConeTrackEnv(time_limit=1.0, sensors="ideal")
+    env.reset(seed=0)
+    steps = 0
+    while True:
+        _, _, terminated, truncated, info = env.step(np.zeros(2, dtype=np.float32))
+        steps += 1
+        if truncated or terminated or steps > 100:
+            break
+    assert steps == 50 and not terminated and info["end_reason"] == "time_limit"
+
+
+@pytest.mark.parametrize("mode", ["sync", "async"])
+def test_make_vec(mode: str) -> None:
+    """gymnasium.make_vec runs two envs in sync and async modes."""
+    vec = gym.make_vec(envs.ENV_ID, num_envs=2, vectorization_mode=mode, sensors="ideal")
+    try:
+        obs, _ = vec.reset(seed=[1, 2])
+        assert obs.shape == (2, 6 + 3 * 32)
+        for _ in range(5):
+            obs, reward, _, _, _ = vec.step(np.zeros((2, 2), dtype=np.float32))
+        assert reward.shape == (2,)
+        assert np.all(np.isfinite(obs))
+    finally:
+        vec.close()
