@@ -1,0 +1,85 @@
+"""The writer: exact round trips and atomic replacement."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from localization.pose import Pose2D
+from tracks import ConeKind, Track, load_track, read_track, shipped_tracks, write_track
+
+
+@pytest.mark.parametrize("name", shipped_tracks())
+def test_round_trip_of_shipped_tracks(tmp_path: Path, name: str) -> None:
+    """Write then read: equal track, same geometry, global path still found."""
+    track = load_track(name)
+    back = read_track(write_track(track, tmp_path / "copy.yaml"))
+    assert back == track
+    np.testing.assert_array_equal(back.cones, track.cones)
+    assert back.kinds == track.kinds and back.start_pose == track.start_pose
+    np.testing.assert_array_equal(back.centreline, track.centreline)
+    assert back.global_path_file is not None and track.global_path_file is not None
+    assert back.global_path_file.resolve() == track.global_path_file.resolve()
+
+
+def test_round_trip_is_exact_for_awkward_floats(tmp_path: Path, stadium) -> None:
+    """Floats that do not print short (1/3, 1e-17 offsets) come back bit for bit."""
+    base = stadium()
+    rng = np.random.default_rng(0)
+    cones = base.cones + rng.uniform(-1e-3, 1e-3, base.cones.shape) / 3.0
+    order = rng.permutation(len(cones))  # interleaved kinds: stored grouped by kind
+    pose = Pose2D(6.0 + 1e-15, -15.0 + 1.0 / 3.0 * 1e-9, 1e-17)
+    track = Track(
+        "awkward",
+        cones[order],
+        tuple(base.kinds[i] for i in order),
+        pose,
+        description="a track: with 'quotes', colons and unicode \u00b0",
+    )
+    back = read_track(write_track(track, tmp_path / "awkward.yaml"))
+    assert back == track
+    assert back.description == track.description
+
+
+def test_written_document_shape(tmp_path: Path, stadium) -> None:
+    """The file is our format: version, name, layout, start pose, cones by kind."""
+    path = write_track(stadium(), tmp_path / "s.yaml")
+    doc = yaml.safe_load(path.read_text())
+    assert list(doc) == ["conesim_track", "name", "layout", "start_pose", "global_path", "cones"]
+    assert doc["conesim_track"] == 1 and doc["layout"] == "closed"
+    assert doc["start_pose"] == [6.0, -15.0, 0.0]
+    assert set(doc["cones"]) == {"blue", "yellow", "big_orange"}
+    assert oct(path.stat().st_mode & 0o777) != "0o600"  # not mkstemp's private mode
+
+
+def test_write_is_atomic(tmp_path: Path, stadium, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A failure while writing leaves the old file untouched and no temporary file behind."""
+    target = tmp_path / "track.yaml"
+    target.write_text("old content\n")
+
+    def broken_replace(src: str, dst: str) -> None:
+        raise OSError("disk full")
+
+    monkeypatch.setattr(os, "replace", broken_replace)
+    with pytest.raises(OSError, match="disk full"):
+        write_track(stadium(), target)
+    assert target.read_text() == "old content\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["track.yaml"]
+
+
+def test_global_path_written_relative(tmp_path: Path, stadium) -> None:
+    """A global path next to the output is written as its bare name."""
+    path_csv = tmp_path / "s_path.csv"
+    path_csv.write_text("37.5,127.0,0.001\n37.50001,127.0,0.001\n")
+    base = stadium()
+    track = Track(
+        base.name, base.cones, base.kinds, base.start_pose, base.layout, global_path_file=path_csv
+    )
+    out = write_track(track, tmp_path / "s.yaml")
+    assert yaml.safe_load(out.read_text())["global_path"] == "s_path.csv"
+    assert read_track(out).global_path_file == path_csv
+    assert ConeKind.BLUE in read_track(out).counts()

@@ -1,0 +1,200 @@
+"""Geometry of closed loops (trackdrive, autocross) and open lanes (acceleration).
+
+Steps (``lane_geometry``):
+
+1. ``order_side``: order the blue and the yellow cones (ordering.py) and
+   orient them the same way round.
+2. a provisional centreline between them (midline.py).
+3. ``driving_reversed``: the driving direction is the start pose's heading;
+   without a start pose, the direction that puts the blue cones on the left.
+4. ``assign_sides``: orange and big orange cones lying on a boundary (within
+   half the local half-width of it) join that side's cones: the start line's
+   big orange cones close the gap they leave in a loop's boundaries, and the
+   orange braking zone extends the acceleration lane. Orange cones elsewhere
+   (e.g. the fssim acceleration's end-of-lane cone on the centreline) do not.
+5. the final centreline, resampled every 0.5 m from the start/finish line
+   (a loop) or from the lane's start (open), and the widths: distance to the
+   left plus distance to the right boundary spline.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from localization.pose import Pose2D
+from tracks.derived import TrackGeometry
+from tracks.errors import TrackGeometryError
+from tracks.kinds import ConeKind
+from tracks.midline import Midline, centreline_between
+from tracks.ordering import order_loop, order_path
+from tracks.polyline import (
+    cumulative_length,
+    curvature,
+    interpolate_at,
+    project,
+    resample,
+    signed_area,
+    tangents,
+)
+from tracks.timing import TimingLine, big_orange_lines, perpendicular_line
+
+FloatArray = NDArray[np.float64]
+
+CENTRELINE_SPACING = 0.5  # [m] spacing of Track.centreline
+MIN_SIDE_CONES = 3  # a boundary needs at least this many cones
+SIDE_TOLERANCE = 0.5  # an orange cone joins a side within this fraction of the half-width
+
+
+def lane_geometry(
+    cones: FloatArray, kinds: tuple[ConeKind, ...], closed: bool, start_pose: Pose2D | None
+) -> TrackGeometry:
+    """Derive the geometry of a loop or a lane from its cones.
+
+    Args:
+        cones: (n, 2) cone positions [m].
+        kinds: (n,) their kinds.
+        closed: a loop (True) or an open lane (False).
+        start_pose: where the car starts; None derives the direction from the
+            cone colours.
+
+    Raises:
+        TrackGeometryError: fewer than 3 blue or 3 yellow cones, or cones from
+            which no centreline can be derived.
+    """
+    kind = np.array([str(k) for k in kinds])
+    blue, yellow = cones[kind == ConeKind.BLUE], cones[kind == ConeKind.YELLOW]
+    if len(blue) < MIN_SIDE_CONES or len(yellow) < MIN_SIDE_CONES:
+        raise TrackGeometryError(
+            f"a track needs at least {MIN_SIDE_CONES} blue (left) and {MIN_SIDE_CONES} "
+            f"yellow (right) cones, found {len(blue)} blue and {len(yellow)} yellow"
+        )
+    left = order_side(blue, closed)
+    right = align_to(order_side(yellow, closed), left, closed)
+    mid = centreline_between(left, right, closed)
+    if driving_reversed(mid, start_pose, blue):
+        left, right = left[::-1], right[::-1]
+        mid = centreline_between(left, right, closed)
+    orange = cones[(kind == ConeKind.ORANGE) | (kind == ConeKind.BIG_ORANGE)]
+    if len(orange):
+        on_left, on_right = assign_sides(orange, mid)
+        left = orient_like(order_side(np.vstack([blue, on_left]), closed), mid)
+        right = align_to(order_side(np.vstack([yellow, on_right]), closed), left, closed)
+        mid = centreline_between(left, right, closed)
+    lines = _timing_lines(cones[kind == ConeKind.BIG_ORANGE], mid, start_pose)
+    return _finish(mid, left, right, lines)
+
+
+def order_side(points: FloatArray, closed: bool) -> FloatArray:
+    """The cones of one boundary in tour order (direction arbitrary)."""
+    return points[order_loop(points) if closed else order_path(points)]
+
+
+def align_to(other: FloatArray, reference: FloatArray, closed: bool) -> FloatArray:
+    """``other`` ordered the same way round as ``reference`` and, for a loop,
+    starting at its cone nearest to ``reference[0]``."""
+    if closed:
+        if np.sign(signed_area(other)) != np.sign(signed_area(reference)):
+            other = other[::-1]
+        first = int(np.argmin(np.hypot(*(other - reference[0]).T)))
+        return np.roll(other, -first, axis=0)
+    same = np.hypot(*(other[0] - reference[0])) + np.hypot(*(other[-1] - reference[-1]))
+    crossed = np.hypot(*(other[-1] - reference[0])) + np.hypot(*(other[0] - reference[-1]))
+    return other[::-1] if crossed < same else other
+
+
+def orient_like(points: FloatArray, mid: Midline) -> FloatArray:
+    """Ordered boundary cones turned to run in the direction of ``mid``."""
+    if mid.closed:
+        same = np.sign(signed_area(points)) == np.sign(signed_area(mid.centre))
+        return points if same else points[::-1]
+    s, _, _ = project(mid.centre, False, points[[0, -1]])
+    return points if s[0] <= s[1] else points[::-1]
+
+
+def driving_reversed(mid: Midline, start_pose: Pose2D | None, blue: FloatArray) -> bool:
+    """Whether the driving direction is against the direction of ``mid``.
+
+    With a start pose: its heading against the centreline's tangent where it
+    stands. Without: most blue cones on the right of ``mid``.
+    """
+    if start_pose is None:
+        _, lateral, _ = project(mid.centre, mid.closed, blue)
+        return bool(np.sum(np.sign(lateral)) < 0)
+    s, _, _ = project(mid.centre, mid.closed, start_pose.xy[None])
+    ahead = _point_at(mid, s[0] + 0.25) - _point_at(mid, s[0] - 0.25)
+    heading = np.array([np.cos(start_pose.yaw), np.sin(start_pose.yaw)])
+    return bool(np.dot(ahead, heading) < 0)
+
+
+def assign_sides(orange: FloatArray, mid: Midline) -> tuple[FloatArray, FloatArray]:
+    """Orange cones lying on the left and on the right boundary.
+
+    A cone is on a side when its distance from the centreline (extended
+    beyond the ends of a lane) is within ``SIDE_TOLERANCE`` of the local
+    half-width, measured where the centreline ends for cones beyond it.
+    """
+    _, lateral, _ = project(mid.centre, mid.closed, orange, extend_ends=not mid.closed)
+    _, _, foot = project(mid.centre, mid.closed, orange)
+    dl, dr = mid.half_widths(foot)
+    half = np.where(lateral > 0, dl, dr)
+    near = np.abs(np.abs(lateral) - half) <= np.maximum(SIDE_TOLERANCE * half, 0.5)
+    return orange[near & (lateral > 0)], orange[near & (lateral <= 0)]
+
+
+def _timing_lines(big: FloatArray, mid: Midline, start_pose: Pose2D | None) -> list[TimingLine]:
+    lines = big_orange_lines(big, mid)
+    if mid.closed:
+        if start_pose is None:
+            return lines[:1] or [perpendicular_line(mid, 0.0)]
+        s_start = float(project(mid.centre, True, start_pose.xy[None])[0][0])
+        if not lines:
+            return [perpendicular_line(mid, s_start)]
+        total = float(cumulative_length(mid.centre, True)[-1])
+        ahead = [((line.s - s_start) % total, line) for line in lines]
+        return [min(ahead, key=lambda pair: min(pair[0], total - pair[0]))[1]]
+    if lines:
+        return lines
+    s0 = 0.0 if start_pose is None else float(project(mid.centre, False, start_pose.xy[None])[0][0])
+    return [perpendicular_line(mid, s0)]
+
+
+def _finish(
+    mid: Midline, left: FloatArray, right: FloatArray, lines: list[TimingLine]
+) -> TrackGeometry:
+    closed = mid.closed
+    start_s = lines[0].s if closed else 0.0
+    centreline = resample(mid.centre, closed, CENTRELINE_SPACING, start_s=start_s)
+    if len(centreline) < 3:
+        raise TrackGeometryError("the centreline is shorter than 1 m")
+    dl, dr = mid.half_widths(centreline)
+    if closed:
+        start_point = lines[0].ends.mean(axis=0)
+        left = _roll_to(left, start_point)
+        right = _roll_to(right, start_point)
+        direction = tangents(centreline, True)[0]
+    else:
+        direction = _unit(_point_at(mid, lines[0].s + 0.25) - _point_at(mid, lines[0].s - 0.25))
+    return TrackGeometry(
+        centreline=centreline,
+        widths=dl + dr,
+        left_boundary=np.array(left, dtype=float),
+        right_boundary=np.array(right, dtype=float),
+        timing_lines=tuple(np.array(line.ends, dtype=float) for line in lines),
+        direction=direction,
+        length_m=float(cumulative_length(mid.centre, closed)[-1]),
+        closed=closed,
+        curvature=curvature(centreline, closed),
+    )
+
+
+def _point_at(mid: Midline, s: float) -> FloatArray:
+    return interpolate_at(mid.centre, mid.closed, np.array([s]))[0]
+
+
+def _roll_to(points: FloatArray, target: FloatArray) -> FloatArray:
+    return np.roll(points, -int(np.argmin(np.hypot(*(points - target).T))), axis=0)
+
+
+def _unit(v: FloatArray) -> FloatArray:
+    return v / max(float(np.hypot(*v)), 1e-12)

@@ -1,0 +1,86 @@
+"""The tracks shipped in ``tracks/data`` and ``load_track`` by name or path.
+
+The data files are found through ``importlib.resources``, so they are found
+from a source checkout, an editable install and a plain ``pip install .``
+alike (pyproject.toml declares ``tracks/data/*.yaml`` and ``*.csv`` as
+package data).
+"""
+
+from __future__ import annotations
+
+import atexit
+import os
+from contextlib import ExitStack
+from functools import cache
+from importlib.resources import as_file, files
+from pathlib import Path
+
+from tracks.errors import TrackNotFoundError
+from tracks.model import Track
+from tracks.readers import read_track
+
+DEFAULT_TRACK = "trackdrive"
+"""The track used when none is named: a gentle FS trackdrive-style loop."""
+
+_DATA = "data"
+_SUFFIX = ".yaml"
+_extracted = ExitStack()  # for installs where the data is not a plain directory (zip)
+atexit.register(_extracted.close)
+
+
+def shipped_tracks() -> list[str]:
+    """Names of the shipped tracks, sorted."""
+    data = files("tracks").joinpath(_DATA)
+    if not data.is_dir():
+        return []
+    return sorted(
+        entry.name[: -len(_SUFFIX)]
+        for entry in data.iterdir()
+        if entry.name.endswith(_SUFFIX) and entry.is_file()
+    )
+
+
+def shipped_track_path(name: str) -> Path:
+    """The file of the shipped track ``name``.
+
+    Raises:
+        TrackNotFoundError: no shipped track of that name (the message lists them).
+    """
+    names = shipped_tracks()
+    if name not in names:
+        raise TrackNotFoundError(
+            f"unknown track {name!r}; shipped tracks: {', '.join(names) or '(none)'}"
+        )
+    resource = files("tracks").joinpath(_DATA).joinpath(name + _SUFFIX)
+    if isinstance(resource, Path):
+        return resource
+    # Extract the whole data directory so the global path CSV sits next to the track.
+    return _extracted.enter_context(as_file(files("tracks").joinpath(_DATA))) / (name + _SUFFIX)
+
+
+def load_track(name_or_path: str | os.PathLike[str]) -> Track:
+    """A shipped track by name (e.g. ``"autocross"``) or a track file by path.
+
+    A string that is a shipped track's name loads that track; anything else
+    is read as a file path (any supported format, see `read_track`).
+
+    Raises:
+        TrackFormatError: the file is not a valid track. Its subclass
+            TrackNotFoundError: neither a shipped name nor an existing file
+            (the message lists the shipped names).
+    """
+    if isinstance(name_or_path, str) and name_or_path in shipped_tracks():
+        return _load_shipped(name_or_path)
+    path = Path(name_or_path)
+    if not path.exists():
+        names = ", ".join(shipped_tracks()) or "(none)"
+        raise TrackNotFoundError(
+            f"{os.fspath(name_or_path)!r} is neither a shipped track ({names}) nor an existing file"
+        )
+    return read_track(path)
+
+
+@cache
+def _load_shipped(name: str) -> Track:
+    """Shipped tracks are immutable data: read and derive each once per process."""
+    return read_track(shipped_track_path(name))
