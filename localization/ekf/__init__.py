@@ -1,0 +1,42 @@
+"""GPS/IMU fusion: a filterpy EKF estimating the pose of ``gps_antenna`` in ``reference``.
+
+Seed 000, "Integrating GPS-IMU Fusion into the TF Chain": the filter's output
+replaces the raw ``/local_xy`` + ``/global_yaw`` pose in the
+``reference -> gps_antenna`` transform (``localization.broadcaster``).
+
+Usage::
+
+    ekf = FusionEkf(for_profile("rtk"))
+    for msg in messages:          # NavSatFix, HeadingStamped, Imu, WheelSpeed
+        ekf.process(msg)
+    if ekf.initialised:
+        est = ekf.estimate(t)     # Estimate: pose, speed, yaw rate, covariances
+
+Modules: :mod:`.model` (state, motion and observation models, Jacobians; the
+state is argued there), :mod:`.config` (settings and per-profile defaults),
+:mod:`.measurements` (message checks), :mod:`.history` (late measurements),
+:mod:`.filter` (the filter), :mod:`.estimate` (its output), :mod:`.health`
+(rejection counters).
+"""
+
+from __future__ import annotations
+
+from localization.ekf.config import PROFILES, EkfConfig, for_profile
+from localization.ekf.estimate import Estimate
+from localization.ekf.filter import FusionEkf, NotInitialisedError
+from localization.ekf.health import Health, RejectReason, Sensor, UpdateResult
+from localization.ekf.model import StateLayout
+
+__all__ = [
+    "PROFILES",
+    "EkfConfig",
+    "Estimate",
+    "FusionEkf",
+    "Health",
+    "NotInitialisedError",
+    "RejectReason",
+    "Sensor",
+    "StateLayout",
+    "UpdateResult",
+    "for_profile",
+]

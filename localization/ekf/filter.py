@@ -1,0 +1,392 @@
+"""The fusion EKF: filterpy's ``ExtendedKalmanFilter`` fed GPS, heading, wheel speed and IMU.
+
+State and models: :mod:`localization.ekf.model` (the antenna pose, body
+velocity, gyro bias, wheel-speed scale and optional Gauss-Markov sensor
+errors; the IMU is the input). How filterpy is used, given its pitfalls
+(REFERENCES.md, "filterpy 2.0.0"):
+
+* ``x`` is (n, 1) and every ``z`` is (m, 1), never 1-D.
+* ``predict`` is linear in filterpy, so :class:`_FilterpyEkf` overrides
+  ``predict_x`` with the nonlinear :func:`~localization.ekf.model.motion_model`
+  and ``F`` and ``Q`` are set from the state before each ``predict``.
+* Angles: the heading residual is wrapped (``residual=``), and yaw is wrapped
+  after every predict and every update; ``P`` is re-symmetrised after both.
+
+Each message goes through, in order:
+
+1. checks (:mod:`.measurements`): a NaN, a NO_FIX fix, a bad covariance or a
+   wrong frame is rejected, counted and logged before it touches the state;
+2. initialisation, until a fix and a heading within ``init_sync_tolerance``
+   of each other have arrived (then the state is set at the fix's stamp and
+   the messages after it are replayed);
+3. its place in the :class:`~.history.History` by stamp: the state is
+   predicted to the stamp with the IMU input held (zero-order hold) and then
+   updated, or, for a message stamped before the newest one, the state before
+   its stamp is restored and everything after it replayed;
+4. for updates, the NIS gate: y' S^-1 y against ``chi2.ppf(gate_probability,
+   m)``; a gated measurement leaves the state as it was. After
+   ``max_consecutive_gps_rejections`` gated fixes in a row the filter assumes
+   it has diverged, resets, and initialises again.
+
+Without GPS (a dropout) nothing special happens: the IMU keeps predicting,
+the heading and wheel speed keep updating, and the position covariance grows
+until the next fix, which the gate measures against that grown covariance.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+import numpy as np
+from filterpy.kalman import ExtendedKalmanFilter
+from numpy.typing import NDArray
+from scipy.stats import chi2
+
+from localization.ekf import model as m
+from localization.ekf.config import EkfConfig
+from localization.ekf.estimate import Estimate
+from localization.ekf.health import Health, RejectReason, Sensor, UpdateResult
+from localization.ekf.history import Entry, History, Snapshot, order_key
+from localization.ekf.measurements import InvalidMessage, Measurement, to_measurement
+from localization.messages import Message
+from localization.pose import wrap_angle
+
+FloatArray = NDArray[np.float64]
+
+_log = logging.getLogger("localization.ekf")
+
+# Per-sample input covariance assumed before the first IMU sample [rad^2/s^2, m^2/s^4].
+NO_IMU_COV = np.diag([1.0, 100.0, 100.0])
+NO_IMU_COV.flags.writeable = False
+
+
+class NotInitialisedError(RuntimeError):
+    """The filter has no state yet (it waits for a fix and a heading)."""
+
+
+def heading_residual(a: FloatArray, b: FloatArray) -> FloatArray:
+    """``a - b`` for headings, wrapped into [-pi, pi) [rad]."""
+    return np.asarray(wrap_angle(np.subtract(a, b)), dtype=float)
+
+
+class _FilterpyEkf(ExtendedKalmanFilter):
+    """filterpy's EKF with the nonlinear motion model as ``predict_x``.
+
+    Args:
+        process: the motion model's settings.
+    """
+
+    def __init__(self, process: m.ProcessModel) -> None:
+        super().__init__(dim_x=process.layout.n, dim_z=2)
+        self.x: FloatArray = np.zeros((process.layout.n, 1))
+        self.process = process
+        self.dt = 0.0  # [s] interval of the next predict
+
+    def predict_x(self, u: Any = 0) -> None:
+        """x = f(x, u, dt) (filterpy would do F x + B u)."""
+        self.x = m.motion_model(self.x, u, self.dt, self.process)
+
+
+def propagate(snap: Snapshot, t: float, process: m.ProcessModel) -> tuple[FloatArray, FloatArray]:
+    """Predict a held state to ``t`` [s] >= ``snap.t`` without touching the filter.
+
+    Returns:
+        (x (n, 1), P (n, n)) at ``t``, yaw wrapped, P symmetric.
+    """
+    dt = t - snap.t
+    if dt <= 0.0:
+        return snap.x, snap.P
+    f = m.jacob_f(snap.x, snap.u, dt, process)
+    x1 = m.motion_model(snap.x, snap.u, dt, process)
+    x1[m.YAW, 0] = wrap_angle(x1[m.YAW, 0])
+    p1 = f @ snap.P @ f.T + m.process_noise(snap.x, snap.u, snap.u_cov, dt, process)
+    return x1, 0.5 * (p1 + p1.T)
+
+
+class FusionEkf:
+    """GPS + heading + wheel speed + IMU fusion into the pose of ``gps_antenna``.
+
+    Args:
+        config: noise model, gating, history; default :class:`EkfConfig`.
+
+    Attributes:
+        config: the settings.
+        layout: the state layout.
+        health: counters of accepted and rejected messages.
+    """
+
+    def __init__(self, config: EkfConfig | None = None) -> None:
+        self.config = config or EkfConfig()
+        self.layout = self.config.layout
+        self.health = Health()
+        self._process = self.config.process_model()
+        self._gates = {dof: float(chi2.ppf(self.config.gate_probability, dof)) for dof in (1, 2)}
+        self._ekf = _FilterpyEkf(self._process)
+        self.reset()
+
+    # -- public ------------------------------------------------------------------------------
+
+    def reset(self) -> None:
+        """Forget the state; the filter initialises again from the next fix and heading."""
+        self._history: History | None = None
+        self._pending: list[Measurement] = []
+        self._t = 0.0
+        self._u = np.zeros(3)
+        self._u_cov = NO_IMU_COV
+        self._gps_rejections_in_row = 0
+
+    @property
+    def initialised(self) -> bool:
+        """Whether the filter has a state."""
+        return self._history is not None
+
+    @property
+    def time(self) -> float | None:
+        """Stamp of the newest message applied [s], or None before initialisation."""
+        return self._t if self._history is not None else None
+
+    def process(self, msg: Message) -> UpdateResult | None:
+        """Hand over one message (any order of stamps within the history window).
+
+        Args:
+            msg: an ``Imu``, ``NavSatFix``, ``HeadingStamped`` or ``WheelSpeed``;
+                other message types are ignored.
+
+        Returns:
+            What came of it, or None for a type the filter does not use.
+            Before initialisation, good messages are kept and reported accepted.
+        """
+        try:
+            meas = to_measurement(msg, self.config)
+        except InvalidMessage as err:
+            self.health.reject(err.sensor, err.reason, err.stamp, err.detail)
+            return UpdateResult(err.sensor, err.stamp, False, err.reason)
+        if meas is None:
+            return None
+        if self._history is None:
+            return self._hold_for_init(meas)
+        result = self._insert(meas, self._history)
+        if self._gps_rejections_in_row >= self.config.max_consecutive_gps_rejections:
+            _log.warning(
+                "%d GPS fixes in a row gated at %.6f s: resetting the filter",
+                self._gps_rejections_in_row,
+                meas.stamp,
+            )
+            self.health.resets += 1
+            self.reset()
+        return result
+
+    def estimate(self, stamp: float | None = None) -> Estimate:
+        """The estimate at ``stamp`` (default: the newest message's stamp).
+
+        A later stamp is predicted forward with the last IMU input held; an
+        earlier one (within the history) starts from the state held then.
+
+        Raises:
+            NotInitialisedError: before initialisation.
+            ValueError: ``stamp`` is older than the history.
+        """
+        if self._history is None:
+            raise NotInitialisedError("the EKF waits for a GPS fix and a heading")
+        snap = self._history.latest
+        if stamp is not None and stamp < snap.t:
+            snap = self._history.snapshot_at(stamp)
+        t = snap.t if stamp is None else stamp
+        x, p = propagate(snap, t, self._process)
+        yaw_rate = float(snap.u[0] - x[m.GYRO_BIAS, 0])
+        return Estimate.from_state(t, x, p, yaw_rate, self.layout.names)
+
+    # -- initialisation ----------------------------------------------------------------------
+
+    def _hold_for_init(self, meas: Measurement) -> UpdateResult:
+        """Keep a message until a fix and a heading allow initialisation."""
+        self._pending.append(meas)
+        self._pending.sort(key=order_key)
+        horizon = self._pending[-1].stamp - self.config.history_window
+        self._pending = [p for p in self._pending if p.stamp >= horizon]
+        if meas.sensor in (Sensor.GPS, Sensor.HEADING):
+            self._try_init()
+        return UpdateResult(meas.sensor, meas.stamp, True)
+
+    def _nearest(self, sensor: Sensor, stamp: float) -> Measurement | None:
+        """The pending message of ``sensor`` nearest ``stamp`` within the sync tolerance."""
+        found = [p for p in self._pending if p.sensor == sensor]
+        if not found:
+            return None
+        best = min(found, key=lambda p: abs(p.stamp - stamp))
+        return best if abs(best.stamp - stamp) <= self.config.init_sync_tolerance else None
+
+    def _try_init(self) -> None:
+        """Initialise at the newest fix's stamp if a heading is close enough in time."""
+        fixes = [q for q in self._pending if q.sensor == Sensor.GPS]
+        if not fixes:
+            return
+        fix = fixes[-1]
+        heading = self._nearest(Sensor.HEADING, fix.stamp)
+        if heading is None:
+            return
+        wheel = self._nearest(Sensor.WHEEL_SPEED, fix.stamp)
+        imus = [q for q in self._pending if q.sensor == Sensor.IMU and q.stamp <= fix.stamp]
+        u, u_cov = (imus[-1].z, imus[-1].cov) if imus else (np.zeros(3), NO_IMU_COV)
+        x, p = self._initial_state(fix, heading, wheel)
+        base = Snapshot(fix.stamp, x, p, u, u_cov)
+        history = History(base, self.config.history_window)
+        self._history = history
+        self._restore(base)
+        used = [q for q in (fix, heading, wheel) if q is not None]
+        for q in used:
+            self.health.accept(q.sensor)
+        later = [q for q in self._pending if q.stamp > fix.stamp and all(q is not k for k in used)]
+        self.health.discarded_before_init += len(self._pending) - len(later) - len(used)
+        self._pending = []
+        skew = heading.stamp - fix.stamp
+        _log.info("EKF initialised at %.6f s (heading %+.3f s from the fix)", fix.stamp, skew)
+        for q in later:
+            self._insert(q, history)
+
+    def _initial_state(
+        self, fix: Measurement, heading: Measurement, wheel: Measurement | None
+    ) -> tuple[FloatArray, FloatArray]:
+        """(x (n, 1), P (n, n)) at the fix's stamp from the first fix, heading, wheel speed.
+
+        Position and yaw are the measurements; the yaw variance grows by
+        ``init_yaw_rate_bound`` times the heading's stamp offset. vx is the wheel
+        speed (or 0 with ``init_speed_sigma``), vy 0 with a sideslip-scaled sigma,
+        the gyro bias 0, the wheel scale 1. A modelled sensor bias starts at 0 with
+        its stationary variance and the state it corrupts at the measured value,
+        with the bias's variance added and a correlation of -1 x that variance
+        (measured = state + bias).
+        """
+        cfg = self.config
+        n = self.layout.n
+        x = np.zeros((n, 1))
+        p = np.zeros((n, n))
+        x[m.X : m.Y + 1] = fix.z
+        p[m.X : m.Y + 1, m.X : m.Y + 1] = fix.cov
+        x[m.YAW, 0] = heading.z[0, 0]
+        skew = abs(heading.stamp - fix.stamp)
+        p[m.YAW, m.YAW] = heading.cov[0, 0] + (cfg.init_yaw_rate_bound * skew) ** 2
+        if wheel is not None:
+            speed = abs(float(wheel.z[0, 0]))
+            x[m.VX, 0] = wheel.z[0, 0]
+            p[m.VX, m.VX] = wheel.cov[0, 0] + (cfg.init_wheel_scale_sigma * speed) ** 2
+        else:
+            speed = cfg.init_speed_sigma
+            p[m.VX, m.VX] = cfg.init_speed_sigma**2
+        p[m.VY, m.VY] = (cfg.init_lateral_speed_sigma + cfg.init_sideslip_sigma * speed) ** 2
+        p[m.GYRO_BIAS, m.GYRO_BIAS] = cfg.init_gyro_bias_sigma**2
+        x[m.WHEEL_SCALE, 0] = 1.0
+        p[m.WHEEL_SCALE, m.WHEEL_SCALE] = cfg.init_wheel_scale_sigma**2
+        g = self.layout.gps_bias_index
+        if g is not None:
+            sb2 = cfg.gps_bias_sigma**2 * np.eye(2)
+            p[m.X : m.Y + 1, m.X : m.Y + 1] += sb2
+            p[g : g + 2, g : g + 2] = sb2
+            p[m.X : m.Y + 1, g : g + 2] = p[g : g + 2, m.X : m.Y + 1] = -sb2
+        h = self.layout.heading_bias_index
+        if h is not None:
+            sh2 = cfg.heading_bias_sigma**2
+            p[m.YAW, m.YAW] += sh2
+            p[h, h] = sh2
+            p[m.YAW, h] = p[h, m.YAW] = -sh2
+        return x, p
+
+    # -- the history -------------------------------------------------------------------------
+
+    def _insert(self, meas: Measurement, history: History) -> UpdateResult:
+        """Apply a message at its place in time, replaying what came after it."""
+        if history.too_old(meas):
+            detail = f"older than the history ({history.base.t!r} s)"
+            self.health.reject(meas.sensor, RejectReason.TOO_OLD, meas.stamp, detail)
+            return UpdateResult(meas.sensor, meas.stamp, False, RejectReason.TOO_OLD)
+        index = history.position(meas)
+        later = history.cut(index)
+        if later:
+            self.health.replays += 1
+            self._restore(history.latest)
+        result = self._apply(meas, history)
+        self._count(result)
+        for entry in later:
+            replayed = self._apply(entry.measurement, history)
+            if replayed.accepted != entry.accepted:
+                self.health.revise(entry.measurement.sensor, entry.accepted, replayed.stamp)
+        history.prune()
+        return result
+
+    def _apply(self, meas: Measurement, history: History) -> UpdateResult:
+        """Predict to the message's stamp, use it, and record the state after it."""
+        self._predict_to(meas.stamp)
+        if meas.sensor == Sensor.IMU:
+            self._u, self._u_cov = meas.z, meas.cov
+            result = UpdateResult(Sensor.IMU, meas.stamp, True)
+        else:
+            result = self._update(meas)
+        history.append(Entry(meas, self._snapshot(), result.accepted, result.nis))
+        return result
+
+    def _count(self, result: UpdateResult) -> None:
+        """Count a first decision; track gated fixes in a row."""
+        if result.accepted:
+            self.health.accept(result.sensor)
+        if result.sensor == Sensor.GPS:
+            self._gps_rejections_in_row = 0 if result.accepted else self._gps_rejections_in_row + 1
+
+    # -- the two Kalman steps ----------------------------------------------------------------
+
+    def _predict_to(self, t: float) -> None:
+        """Predict with the held IMU input from the filter's time to ``t`` [s]."""
+        dt = t - self._t
+        if dt <= 0.0:
+            return
+        ekf = self._ekf
+        ekf.dt = dt
+        ekf.F = m.jacob_f(ekf.x, self._u, dt, self._process)
+        ekf.Q = m.process_noise(ekf.x, self._u, self._u_cov, dt, self._process)
+        ekf.predict(u=self._u)
+        self._tidy()
+        self._t = t
+
+    def _update(self, meas: Measurement) -> UpdateResult:
+        """Gate one measurement by its NIS and, if it passes, apply it."""
+        ekf = self._ekf
+        hx, jac, residual = self._observation(meas.sensor, ekf.x)
+        y = residual(meas.z, hx)
+        s = jac @ ekf.P @ jac.T + meas.cov
+        nis = float((y.T @ np.linalg.solve(s, y))[0, 0])
+        dof = y.shape[0]
+        if not nis <= self._gates[dof]:
+            detail = f"NIS {nis:.3g} > {self._gates[dof]:.3g} ({dof} dof)"
+            self.health.reject(meas.sensor, RejectReason.NIS_GATE, meas.stamp, detail)
+            return UpdateResult(meas.sensor, meas.stamp, False, RejectReason.NIS_GATE, nis, dof)
+        ekf.update(meas.z, lambda _x: jac, lambda _x: hx, R=meas.cov, residual=residual)
+        self._tidy()
+        return UpdateResult(meas.sensor, meas.stamp, True, None, nis, dof)
+
+    def _observation(self, sensor: Sensor, x: FloatArray) -> tuple[FloatArray, FloatArray, Any]:
+        """(h(x), H, residual function) of a measurement type."""
+        layout = self.layout
+        if sensor == Sensor.GPS:
+            return m.h_position(x, layout), m.jacob_h_position(x, layout), np.subtract
+        if sensor == Sensor.HEADING:
+            return m.h_heading(x, layout), m.jacob_h_heading(x, layout), heading_residual
+        return m.h_wheel_speed(x, layout), m.jacob_h_wheel_speed(x, layout), np.subtract
+
+    def _tidy(self) -> None:
+        """Wrap yaw and re-symmetrise P after a predict or an update."""
+        ekf = self._ekf
+        ekf.x[m.YAW, 0] = wrap_angle(ekf.x[m.YAW, 0])
+        ekf.P = 0.5 * (ekf.P + ekf.P.T)
+
+    def _snapshot(self) -> Snapshot:
+        """A private copy of the filter's state."""
+        ekf = self._ekf
+        return Snapshot(self._t, ekf.x.copy(), ekf.P.copy(), self._u, self._u_cov)
+
+    def _restore(self, snap: Snapshot) -> None:
+        """Load a snapshot into the filter (as copies)."""
+        self._ekf.x = snap.x.copy()
+        self._ekf.P = snap.P.copy()
+        self._t = snap.t
+        self._u = snap.u
+        self._u_cov = snap.u_cov

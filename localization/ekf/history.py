@@ -1,0 +1,138 @@
+"""The filter's short memory: recent inputs and measurements, each with the state after it.
+
+Measurements arrive late (GPS 0.05-0.2 s after capture) while the IMU keeps
+driving the state forward. The filter therefore keeps, for the last
+``window`` seconds, every input and measurement in stamp order together with
+a snapshot of the state right after it. A message stamped in the past is
+inserted at its place; the filter restores the snapshot just before it and
+replays everything after it, which gives exactly the estimate it would have
+had if the message had arrived on time.
+
+Order at equal stamps is fixed by the sensor (IMU first, then wheel speed,
+heading, GPS), then by arrival, so that the order never depends on latency.
+Older entries are dropped; the snapshot after the last dropped one becomes the
+``base``, and a message stamped before it is too old to apply.
+"""
+
+from __future__ import annotations
+
+import bisect
+from dataclasses import dataclass
+from typing import Final
+
+import numpy as np
+from numpy.typing import NDArray
+
+from localization.ekf.health import Sensor
+from localization.ekf.measurements import Measurement
+
+FloatArray = NDArray[np.float64]
+
+RANK: Final = {Sensor.IMU: 0, Sensor.WHEEL_SPEED: 1, Sensor.HEADING: 2, Sensor.GPS: 3}
+"""Processing order of messages with equal stamps."""
+
+
+@dataclass(frozen=True, slots=True)
+class Snapshot:
+    """The filter's state at one time (arrays are private copies; never mutate them).
+
+    Attributes:
+        t: time of the state [s].
+        x: state, (n, 1).
+        P: covariance, (n, n).
+        u: IMU input held from ``t`` on, (3,).
+        u_cov: its per-sample covariance, (3, 3).
+    """
+
+    t: float
+    x: FloatArray
+    P: FloatArray
+    u: FloatArray
+    u_cov: FloatArray
+
+
+@dataclass(slots=True)
+class Entry:
+    """One processed message and what came of it.
+
+    Attributes:
+        measurement: the message, checked.
+        after: the state right after it.
+        accepted: whether it was applied (False: gated).
+        nis: its normalised innovation squared, if an update.
+    """
+
+    measurement: Measurement
+    after: Snapshot
+    accepted: bool
+    nis: float | None
+
+
+def order_key(m: Measurement) -> tuple[float, int]:
+    """Sort key of a message: (stamp, sensor rank)."""
+    return (m.stamp, RANK[m.sensor])
+
+
+class History:
+    """Entries in stamp order over the last ``window`` seconds, above a base state.
+
+    Args:
+        base: the state before the first entry (e.g. the initial state).
+        window: how long entries are kept, back from the newest stamp [s].
+    """
+
+    def __init__(self, base: Snapshot, window: float) -> None:
+        self.base = base
+        self.window = window
+        self.entries: list[Entry] = []
+        self._keys: list[tuple[float, int]] = []
+
+    @property
+    def latest(self) -> Snapshot:
+        """The state after the newest entry."""
+        return self.entries[-1].after if self.entries else self.base
+
+    def too_old(self, m: Measurement) -> bool:
+        """Whether ``m`` is stamped before the base state."""
+        return m.stamp < self.base.t
+
+    def position(self, m: Measurement) -> int:
+        """Index at which ``m`` belongs (after entries with an equal key)."""
+        return bisect.bisect_right(self._keys, order_key(m))
+
+    def cut(self, index: int) -> list[Entry]:
+        """Remove and return the entries from ``index`` on."""
+        later = self.entries[index:]
+        del self.entries[index:]
+        del self._keys[index:]
+        return later
+
+    def append(self, entry: Entry) -> None:
+        """Add an entry after the last one (its key must not sort before it)."""
+        self.entries.append(entry)
+        self._keys.append(order_key(entry.measurement))
+
+    def prune(self) -> None:
+        """Drop entries older than the newest stamp minus the window."""
+        if not self.entries:
+            return
+        horizon = self.entries[-1].measurement.stamp - self.window
+        drop = bisect.bisect_left(self._keys, (horizon, -1))
+        if drop:
+            self.base = self.entries[drop - 1].after
+            del self.entries[:drop]
+            del self._keys[:drop]
+
+    def snapshot_at(self, t: float) -> Snapshot:
+        """The newest state at or before ``t`` [s].
+
+        Raises:
+            ValueError: ``t`` is before the base state.
+        """
+        if t < self.base.t:
+            raise ValueError(
+                f"time {t!r} s is before the oldest state held ({self.base.t!r} s); "
+                f"the history keeps {self.window!r} s"
+            )
+        i = bisect.bisect_right(self._keys, (t, len(RANK)))
+        return self.entries[i - 1].after if i else self.base

@@ -1,0 +1,224 @@
+"""Messages -> checked measurement vectors and covariances for the fusion EKF.
+
+Each converter checks its message before anything reaches the filter, and
+raises :class:`InvalidMessage` with a :class:`RejectReason` otherwise:
+
+* the stamp and every value finite (NaN/inf: ``NON_FINITE``);
+* the frame the message must be in (``WRONG_FRAME``);
+* a GPS fix with a position (status NO_FIX: ``NO_FIX``);
+* a stated covariance that is finite, symmetric (to 1e-9 relative) and
+  positive semi-definite (``BAD_COVARIANCE``): a negative variance or a
+  non-symmetric matrix is a driver bug, not a very sure sensor.
+
+A sensor that states the *total* variance of an error the filter partly models
+as a Gauss-Markov state (``EkfConfig.gps_bias_sigma``, ``heading_bias_sigma``)
+gets that part subtracted, and every measurement covariance is floored
+(``*_sigma_floor``) so that an ideal sensor stating zero does not make the
+covariance singular.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from localization.ekf.config import EkfConfig
+from localization.ekf.health import RejectReason, Sensor
+from localization.geodesy import GeodesyError
+from localization.gps_to_local import gps_to_local_cartesian
+from localization.messages import HeadingStamped, Imu, Message, NavSatFix, NavSatStatus, WheelSpeed
+from localization.pose import wrap_angle
+
+FloatArray = NDArray[np.float64]
+
+SYMMETRY_TOLERANCE = 1e-9  # [-] relative to the largest entry
+
+
+class InvalidMessage(ValueError):
+    """A message the filter must not use.
+
+    Attributes:
+        sensor: its stream.
+        reason: why.
+        stamp: its stamp [s] (may be NaN).
+        detail: what exactly was wrong.
+    """
+
+    def __init__(self, sensor: Sensor, reason: RejectReason, stamp: float, detail: str) -> None:
+        super().__init__(f"{sensor} at {stamp!r} s: {reason}: {detail}")
+        self.sensor = sensor
+        self.reason = reason
+        self.stamp = stamp
+        self.detail = detail
+
+
+@dataclass(frozen=True, slots=True)
+class Measurement:
+    """A checked message, ready for the filter.
+
+    Attributes:
+        sensor: its stream; IMU samples are the filter's input, not a measurement.
+        stamp: capture time [s].
+        z: measurement (m, 1); for the IMU the input (w_m, a_x, a_y), (3,).
+        cov: measurement covariance (m, m); for the IMU the input's, (3, 3).
+    """
+
+    sensor: Sensor
+    stamp: float
+    z: FloatArray
+    cov: FloatArray
+
+
+def _check(ok: bool, sensor: Sensor, reason: RejectReason, stamp: float, detail: str) -> None:
+    if not ok:
+        raise InvalidMessage(sensor, reason, stamp, detail)
+
+
+def _check_header(sensor: Sensor, stamp: float, frame_id: str, expected: str) -> None:
+    _check(math.isfinite(stamp), sensor, RejectReason.NON_FINITE, stamp, "stamp is not finite")
+    _check(
+        frame_id == expected,
+        sensor,
+        RejectReason.WRONG_FRAME,
+        stamp,
+        f"frame_id {frame_id!r}, expected {expected!r}",
+    )
+
+
+def _check_variance(sensor: Sensor, stamp: float, variance: float, what: str) -> None:
+    """A stated variance: finite (NON_FINITE) and >= 0 (BAD_COVARIANCE)."""
+    _check(math.isfinite(variance), sensor, RejectReason.NON_FINITE, stamp, f"{what} not finite")
+    _check(variance >= 0.0, sensor, RejectReason.BAD_COVARIANCE, stamp, f"{what} {variance!r} < 0")
+
+
+def _check_covariance(sensor: Sensor, stamp: float, cov: FloatArray, what: str) -> None:
+    """A stated covariance matrix: finite (NON_FINITE), then symmetric and PSD (BAD_COVARIANCE)."""
+    _check(
+        bool(np.all(np.isfinite(cov))),
+        sensor,
+        RejectReason.NON_FINITE,
+        stamp,
+        f"{what} is not finite",
+    )
+    scale = max(1.0, float(np.max(np.abs(cov))))
+    _check(
+        bool(np.all(np.abs(cov - cov.T) <= SYMMETRY_TOLERANCE * scale)),
+        sensor,
+        RejectReason.BAD_COVARIANCE,
+        stamp,
+        f"{what} is not symmetric: {cov.tolist()}",
+    )
+    smallest = float(np.min(np.linalg.eigvalsh(cov)))
+    _check(
+        bool(np.all(np.diag(cov) >= 0.0)) and smallest >= -SYMMETRY_TOLERANCE * scale,
+        sensor,
+        RejectReason.BAD_COVARIANCE,
+        stamp,
+        f"{what} is negative or not positive semi-definite (smallest eigenvalue {smallest!r})",
+    )
+
+
+def _floored(cov: FloatArray, floor: float) -> FloatArray:
+    """``cov`` raised so that its smallest eigenvalue is at least ``floor``^2."""
+    smallest = float(np.min(np.linalg.eigvalsh(cov)))
+    if smallest < floor * floor:
+        cov = cov + (floor * floor - smallest) * np.eye(cov.shape[0])
+    return cov
+
+
+def _frozen(a: FloatArray) -> FloatArray:
+    a.flags.writeable = False
+    return a
+
+
+def from_imu(msg: Imu, cfg: EkfConfig) -> Measurement:
+    """The filter's input u = (w_m, a_x, a_y) and its per-sample covariance."""
+    stamp = msg.header.stamp
+    _check_header(Sensor.IMU, stamp, msg.header.frame_id, cfg.antenna_frame)
+    ok = all(math.isfinite(v) for v in (msg.yaw_rate, msg.accel_x, msg.accel_y))
+    _check(ok, Sensor.IMU, RejectReason.NON_FINITE, stamp, "value not finite")
+    _check_variance(Sensor.IMU, stamp, msg.yaw_rate_variance, "yaw_rate_variance")
+    _check_variance(Sensor.IMU, stamp, msg.accel_variance, "accel_variance")
+    u = np.array([msg.yaw_rate, msg.accel_x, msg.accel_y], dtype=float)
+    cov = np.diag([msg.yaw_rate_variance, msg.accel_variance, msg.accel_variance])
+    return Measurement(Sensor.IMU, stamp, _frozen(u), _frozen(cov))
+
+
+def from_fix(msg: NavSatFix, cfg: EkfConfig) -> Measurement:
+    """The antenna position in ``reference`` (the seed's ``/local_xy``), (2, 1) [m]."""
+    stamp = msg.header.stamp
+    _check_header(Sensor.GPS, stamp, msg.header.frame_id, cfg.antenna_frame)
+    _check(msg.status != NavSatStatus.NO_FIX, Sensor.GPS, RejectReason.NO_FIX, stamp, "no fix")
+    full = np.asarray(msg.position_covariance, dtype=float)
+    _check_covariance(Sensor.GPS, stamp, full, "position_covariance")
+    try:
+        point = gps_to_local_cartesian(msg, cfg.origin, cfg.reference_frame)
+    except GeodesyError as err:
+        raise InvalidMessage(Sensor.GPS, RejectReason.NON_FINITE, stamp, str(err)) from None
+    horizontal = full[:2, :2] - cfg.gps_bias_sigma**2 * np.eye(2)
+    cov = _floored(horizontal, cfg.gps_sigma_floor)
+    z = np.array([[point.x], [point.y]])
+    return Measurement(Sensor.GPS, stamp, _frozen(z), _frozen(cov))
+
+
+def _scalar(
+    sensor: Sensor,
+    stamp: float,
+    value: float,
+    variance: float,
+    *,
+    floor: float,
+    bias_sigma: float = 0.0,
+) -> Measurement:
+    """A checked scalar measurement; its variance less ``bias_sigma``^2, floored."""
+    _check(math.isfinite(value), sensor, RejectReason.NON_FINITE, stamp, "value not finite")
+    _check_variance(sensor, stamp, variance, "variance")
+    z = np.array([[value]], dtype=float)
+    cov = np.array([[max(variance - bias_sigma * bias_sigma, floor * floor)]])
+    return Measurement(sensor, stamp, _frozen(z), _frozen(cov))
+
+
+def from_heading(msg: HeadingStamped, cfg: EkfConfig) -> Measurement:
+    """The heading of ``gps_antenna`` in ``reference``, (1, 1) [rad], wrapped.
+
+    The part of the stated variance that the heading-bias state models is
+    subtracted before the floor.
+    """
+    stamp = msg.header.stamp
+    _check_header(Sensor.HEADING, stamp, msg.header.frame_id, cfg.reference_frame)
+    yaw = float(wrap_angle(msg.yaw)) if math.isfinite(msg.yaw) else msg.yaw
+    return _scalar(
+        Sensor.HEADING,
+        stamp,
+        yaw,
+        msg.variance,
+        floor=cfg.heading_sigma_floor,
+        bias_sigma=cfg.heading_bias_sigma,
+    )
+
+
+def from_wheel_speed(msg: WheelSpeed, cfg: EkfConfig) -> Measurement:
+    """The wheel-encoder speed, (1, 1) [m/s]."""
+    stamp = msg.header.stamp
+    _check_header(Sensor.WHEEL_SPEED, stamp, msg.header.frame_id, cfg.antenna_frame)
+    return _scalar(Sensor.WHEEL_SPEED, stamp, msg.speed, msg.variance, floor=cfg.speed_sigma_floor)
+
+
+def to_measurement(msg: Message, cfg: EkfConfig) -> Measurement | None:
+    """Convert any message; None for the types the filter does not use.
+
+    Raises:
+        InvalidMessage: a message of a used type that fails a check.
+    """
+    if isinstance(msg, Imu):
+        return from_imu(msg, cfg)
+    if isinstance(msg, NavSatFix):
+        return from_fix(msg, cfg)
+    if isinstance(msg, HeadingStamped):
+        return from_heading(msg, cfg)
+    if isinstance(msg, WheelSpeed):
+        return from_wheel_speed(msg, cfg)
+    return None
