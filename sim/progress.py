@@ -97,7 +97,6 @@ class PolylineProgress:
         lateral = float(t[0] * r[1] - t[1] * r[0])
         return Projection(float(self._s0[seg] + u[k]), lateral, seg, (float(t[0]), float(t[1])))
 
-
     def _foot(self, i: int, px: float, py: float) -> tuple[float, float, float]:
         """Distance^2 to segment i, the foot's arc position u, and lateral offset."""
         sx, sy = self._starts_list[i]

@@ -118,7 +118,9 @@ class World:
         self.space.idle_speed_threshold = IDLE_SPEED_THRESHOLD
         pose = start_pose or track.start_pose
         self.vehicle = Vehicle(self.space, cfg.vehicle, pose)
-        self.cones = ConeField(self.space, track.cones, tuple(str(k) for k in track.kinds), cfg.cones)
+        self.cones = ConeField(
+            self.space, track.cones, tuple(str(k) for k in track.kinds), cfg.cones
+        )
         self.cone_map = ConeMap(track.cones, tuple(str(k) for k in track.kinds))
         self._cone_version = self.cones.version
         self.space.step(1e-9)  # let pymunk register the bodies before they sleep
