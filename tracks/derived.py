@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -27,6 +28,12 @@ class SkidpadCircle:
     r_inner: float
     r_outer: float
     inner_kind: ConeKind
+
+    def __post_init__(self) -> None:
+        self.centre.setflags(write=False)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return _rebuild, (type(self), _field_values(self))
 
     @property
     def radius(self) -> float:
@@ -78,6 +85,10 @@ class TrackGeometry:
         for line in self.timing_lines:
             line.setflags(write=False)
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        # Through the constructor, so that unpickled arrays are read-only again.
+        return _rebuild, (type(self), _field_values(self))
+
     @property
     def start_finish(self) -> FloatArray:
         """(2, 2) the start (and, on a loop, finish) line [m]."""
@@ -87,3 +98,12 @@ class TrackGeometry:
     def finish_line(self) -> FloatArray:
         """(2, 2) the line where the timed run ends [m] (a loop: the start/finish line)."""
         return self.timing_lines[-1]
+
+
+def _field_values(obj: Any) -> dict[str, Any]:
+    return {f.name: getattr(obj, f.name) for f in fields(obj)}
+
+
+def _rebuild(cls: type[Any], values: dict[str, Any]) -> Any:
+    """Unpickle a frozen dataclass through its constructor (re-running its checks)."""
+    return cls(**{k: (np.array(v) if isinstance(v, np.ndarray) else v) for k, v in values.items()})

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from functools import cached_property
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -97,6 +98,13 @@ class Track:
 
     __hash__ = None  # type: ignore[assignment]  # mutable-looking arrays inside
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        # Through the constructor, so that the unpickled cones are read-only again;
+        # derived geometry travels along if it was computed.
+        values = {f.name: getattr(self, f.name) for f in fields(self)}
+        values["cones"] = np.array(self.cones)
+        return _unpickle, (values, self.__dict__.get("geometry"))
+
     def cones_of(self, kind: ConeKind | str) -> FloatArray:
         """(k, 2) the cones of one kind [m], read-only."""
         mask = np.array([k == kind for k in self.kinds], dtype=bool)
@@ -157,6 +165,13 @@ class Track:
     def length_m(self) -> float:
         """Length of the centreline [m]: one lap of a loop, the whole lane otherwise."""
         return self.geometry.length_m
+
+
+def _unpickle(values: dict[str, Any], geometry: TrackGeometry | None) -> Track:
+    track = Track(**values)
+    if geometry is not None:
+        track.__dict__["geometry"] = geometry
+    return track
 
 
 def _as_cones(cones: ArrayLike) -> FloatArray:

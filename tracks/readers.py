@@ -122,8 +122,10 @@ def assemble(raw: RawTrack, path: Path) -> Track:
     cones = np.array([[c.x, c.y] for c in raw.cones], dtype=float).reshape(-1, 2)
     kinds = tuple(c.kind for c in raw.cones)
     try:
-        layout = raw.layout or detect_layout(cones, kinds)
-        start = raw.start_pose or derive_start_pose(cones, kinds, layout)
+        layout = raw.layout if raw.layout is not None else detect_layout(cones, kinds)
+        start = raw.start_pose
+        if start is None:
+            start = derive_start_pose(cones, kinds, layout)
         track = Track(
             name=raw.name or path.stem,
             cones=cones,

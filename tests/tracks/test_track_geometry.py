@@ -225,3 +225,18 @@ def test_bad_track_arguments_raise_track_format_error() -> None:
         Track("t", np.zeros((1, 2)), ("purple",), pose)  # type: ignore[arg-type]
     with pytest.raises(TrackFormatError, match="oval"):
         Track("t", np.zeros((1, 2)), (ConeKind.BLUE,), pose, "oval")  # type: ignore[arg-type]
+
+
+def test_pickle_round_trip(skidpad) -> None:
+    """A track (with its derived geometry) survives pickling, still read-only."""
+    import pickle
+
+    track = skidpad()
+    _ = track.centreline
+    back = pickle.loads(pickle.dumps(track))
+    assert back == track
+    assert "geometry" in back.__dict__  # not derived again
+    np.testing.assert_array_equal(back.centreline, track.centreline)
+    assert not back.cones.flags.writeable and not back.centreline.flags.writeable
+    assert back.geometry.circles is not None
+    assert not back.geometry.circles[0].centre.flags.writeable
