@@ -15,6 +15,7 @@ when the file has none) and a derivable geometry. Every problem raises
 
 from __future__ import annotations
 
+import logging
 import os
 from enum import StrEnum
 from pathlib import Path
@@ -33,6 +34,7 @@ from tracks.rawtrack import RawTrack
 from tracks.yamlnodes import compose, mapping
 
 MAX_FILE_BYTES = 20_000_000  # a track file is kilobytes; anything this large is not one
+_log = logging.getLogger(__name__)
 DUPLICATE_RADIUS = 0.1  # [m] two cones closer than this are one cone listed twice
 
 
@@ -118,6 +120,7 @@ def parse(text: str, path: Path) -> tuple[TrackFileFormat, RawTrack]:
 
 def assemble(raw: RawTrack, path: Path) -> Track:
     """Check a parsed file's cones and build its `Track` (see the module docstring)."""
+    _drop_exact_repeats(raw, path)
     _check_cones(raw, path)
     cones = np.array([[c.x, c.y] for c in raw.cones], dtype=float).reshape(-1, 2)
     kinds = tuple(c.kind for c in raw.cones)
@@ -140,6 +143,29 @@ def assemble(raw: RawTrack, path: Path) -> Track:
     except TrackFormatError as exc:
         raise exc.with_path(path) from None
     return track
+
+
+def _drop_exact_repeats(raw: RawTrack, path: Path) -> None:
+    """Drop a cone listed twice with the same kind and position, with a warning.
+
+    Published files do this (fssim's own acceleration.yaml and skidpad.yaml each
+    list one orange cone twice); it is one cone, not a malformed file. Two cones
+    merely close together, or of different kinds, are still refused by
+    ``_check_cones``.
+    """
+    seen: dict[tuple[ConeKind, float, float], int] = {}
+    kept = []
+    for cone in raw.cones:
+        key = (cone.kind, cone.x, cone.y)
+        if key in seen:
+            _log.warning(
+                "%s:%d: %s cone at (%g, %g) repeats line %d exactly; dropped",
+                path, cone.line, cone.kind, cone.x, cone.y, seen[key],
+            )  # fmt: skip
+            continue
+        seen[key] = cone.line
+        kept.append(cone)
+    raw.cones = kept
 
 
 def _check_cones(raw: RawTrack, path: Path) -> None:

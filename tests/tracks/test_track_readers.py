@@ -423,3 +423,20 @@ def test_error_is_picklable() -> None:
     back = pickle.loads(pickle.dumps(err))
     assert str(back) == "f.csv:3: bad" and back.line == 3
     assert math.isfinite(float(np.float64(1.0)))
+
+
+def test_exact_repeat_is_dropped_with_a_warning(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A cone listed twice exactly (as fssim's own files do) is one cone, with a warning."""
+    text = eufs_text(lane_rows())
+    lines = text.splitlines()
+    repeated = lines[3]
+    path = tmp_path / "repeat.csv"
+    path.write_text("\n".join([*lines, repeated]) + "\n")
+    original = tmp_path / "original.csv"
+    original.write_text(text)
+    with caplog.at_level("WARNING", logger="tracks.readers"):
+        track = read_track(path)
+    assert len(track.cones) == len(read_track(original).cones)
+    assert f"repeat.csv:{len(lines) + 1}" in caplog.text and "dropped" in caplog.text
