@@ -82,6 +82,9 @@ def _ground_friction(mu_g: float) -> Any:
     def velocity_func(body: pymunk.Body, gravity: Any, damping: float, dt: float) -> None:
         pymunk.Body.update_velocity(body, gravity, damping, dt)
         vx, vy = body.velocity
+        w = body.angular_velocity
+        if vx == 0.0 and vy == 0.0 and w == 0.0:
+            return  # at rest: setting a velocity would wake the body and reset its idle time
         speed = math.hypot(vx, vy)
         dv = decel * dt
         if speed <= dv:
@@ -89,7 +92,6 @@ def _ground_friction(mu_g: float) -> Any:
         else:
             k = (speed - dv) / speed
             body.velocity = (vx * k, vy * k)
-        w = body.angular_velocity
         dw = 4.0 * dv  # spin stops on the same time scale as sliding
         body.angular_velocity = 0.0 if abs(w) <= dw else w - math.copysign(dw, w)
 

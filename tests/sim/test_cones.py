@@ -109,3 +109,14 @@ def test_bad_params_name_the_field(name: str) -> None:
     """Non-positive parameters are refused with the field named."""
     with pytest.raises(ValueError, match=f"ConeParams.{name}"):
         ConeParams(**{name: 0.0})
+
+
+def test_pushed_cone_falls_asleep_again() -> None:
+    """After sliding to rest a knocked cone sleeps again (ground friction must not wake it)."""
+    space = make_space()
+    field = ConeField(space, np.array([[0.0, 0.0]]), ("blue",))
+    field.bodies[0].velocity = (1.0, 0.0)
+    for _ in range(200):  # 0.17 s of sliding, then the 0.3 s sleep threshold
+        space.step(DT)
+    assert field.bodies[0].is_sleeping
+    assert field.awake_count == 0
