@@ -16,7 +16,8 @@ Modules: :mod:`.model` (state, motion and observation models, Jacobians; the
 state is argued there), :mod:`.config` (settings and per-profile defaults),
 :mod:`.measurements` (message checks), :mod:`.history` (late measurements),
 :mod:`.filter` (the filter), :mod:`.estimate` (its output), :mod:`.health`
-(rejection counters).
+(rejection counters), :mod:`.synthetic` (a synthetic car for consistency tests
+and benchmarks; not used by the pipeline).
 """
 
 from __future__ import annotations
