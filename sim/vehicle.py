@@ -17,11 +17,12 @@ friction only acts on contacts with other shapes. The tyres are modelled by
    velocity, then the velocity with the forces (semi-implicit Euler), and
    resolves contacts; the heading change of a step is therefore yaw_rate*dt,
    known before the step.
-3. ``post_step()`` records the body-frame acceleration from the velocity
-   change over the step, rotated into the body frame at which the force was
-   applied: ax, ay = R(-yaw_start) (v_end - v_start) / dt. Without contacts
-   this equals the applied force / mass exactly; with contacts it includes
-   the impulse, as a real accelerometer would.
+3. ``post_step()`` records the body-frame acceleration of the step, as an
+   integrating accelerometer reports it: the velocity change over the step
+   seen from the mid-step heading, ax, ay = R(-(yaw_start + r dt / 2))
+   (v_end - v_start) / dt (the body turns by r dt during the step). It
+   differs from the applied force / mass by that half-step rotation; with
+   contacts it includes the impulse, as a real accelerometer would.
 
 ``step(space, vehicle, dt)`` runs the three for a space holding one car; a
 world with several bodies calls ``pre_step`` on every car, ``space.step``
@@ -251,7 +252,11 @@ class Vehicle:
         vwx0, vwy0, r0, yaw0, dt = self._pre
         vwx, vwy = self._body.velocity
         dvx, dvy = (vwx - vwx0) / dt, (vwy - vwy0) / dt
-        c, s = math.cos(yaw0), math.sin(yaw0)
+        # Mean body-frame acceleration over the step: the body turned by r0 * dt
+        # during it, so the world-frame velocity change is seen from the
+        # mid-step heading (what an integrating accelerometer reports).
+        yaw_mid = yaw0 + 0.5 * r0 * dt
+        c, s = math.cos(yaw_mid), math.sin(yaw_mid)
         self._accel = (
             c * dvx + s * dvy,
             -s * dvx + c * dvy,

@@ -194,6 +194,9 @@ class World:
 
         Rigid-body kinematics move the CG's velocity and acceleration to the
         lever arm r = (rx, ry): v = v_cg + w x r, a = a_cg + dw/dt x r - w^2 r.
+        The yaw rate is the mean over the last step (pymunk turned the body
+        with the rate at the step's start, w - dw/dt dt), matching the step-mean
+        acceleration, as an integrating IMU sees them.
         """
         s = self._state
         rx, ry = s.antenna_x, s.antenna_y
@@ -202,7 +205,7 @@ class World:
             t=self.time,
             antenna_pose=s.antenna_pose(),
             speed=s.vx - w * ry,
-            yaw_rate=w,
+            yaw_rate=w - dw * self.dt if self.steps else w,
             accel_x=s.ax - dw * ry - w * w * rx,
             accel_y=s.ay + dw * rx - w * w * ry,
             cone_positions=self.cones.positions,

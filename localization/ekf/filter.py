@@ -315,12 +315,20 @@ class FusionEkf:
         return result
 
     def _apply(self, meas: Measurement, history: History) -> UpdateResult:
-        """Predict to the message's stamp, use it, and record the state after it."""
-        self._predict_to(meas.stamp)
+        """Predict to the message's stamp, use it, and record the state after it.
+
+        An IMU sample is the motion over the interval that ends at its stamp (a
+        MEMS IMU reports the average over its sample period; the simulator's is
+        the acceleration over the last physics step), so it becomes the input
+        *before* predicting to its stamp. Other messages are predicted to with
+        the newest input held.
+        """
         if meas.sensor == Sensor.IMU:
             self._u, self._u_cov = meas.z, meas.cov
+            self._predict_to(meas.stamp)
             result = UpdateResult(Sensor.IMU, meas.stamp, True)
         else:
+            self._predict_to(meas.stamp)
             result = self._update(meas)
         history.append(Entry(meas, self._snapshot(), result.accepted, result.nis))
         return result

@@ -12,10 +12,11 @@ all the time, so its yaw crosses +-pi every few seconds. Positions are
 integrated with tight tolerances (``scipy.integrate.solve_ivp``).
 
 The IMU reports the *interval mean* of the yaw rate and specific force over
-the sample period that starts at its stamp (an integrating IMU). That is the
-input the filter's zero-order hold assumes, so a test measures the filter's
-own consistency, not a sampling mismatch. Each run draws a constant gyro bias
-and wheel-speed scale from the filter's priors.
+the sample period that ends at its stamp (an integrating IMU, as real MEMS
+parts and the simulator's IMU are: causal). That is the input the filter's
+hold assumes (each sample drives the prediction up to its own stamp), so a
+test measures the filter's own consistency, not a sampling mismatch. Each
+run draws a constant gyro bias and wheel-speed scale from the filter's priors.
 """
 
 from __future__ import annotations
@@ -107,7 +108,7 @@ class Truth:
         xy: antenna positions [m], (n, 2).
         yaw: yaw, unwrapped [rad], (n,).
         v: body velocity [m/s], (n, 2).
-        imu: interval-mean (w [rad/s], ax, ay [m/s^2]) over [t, t + imu period], (n, 3).
+        imu: interval-mean (w [rad/s], ax, ay [m/s^2]) over [t - imu period, t], (n, 3).
     """
 
     t: FloatArray
@@ -141,10 +142,10 @@ def make_truth(path: Path, duration: float, imu_rate: float = 100.0) -> Truth:
     )
     period = 1.0 / imu_rate
     imu = np.zeros((len(t), 3))
-    imu[:, 0] = (path.yaw(t + period) - path.yaw(t)) / period
+    imu[:, 0] = (path.yaw(t) - path.yaw(t - period)) / period
     nodes, weights = np.polynomial.legendre.leggauss(4)
     for node, weight in zip(nodes, weights, strict=True):
-        imu[:, 1:] += 0.5 * weight * path.specific_force(t + 0.5 * period * (node + 1.0)).T
+        imu[:, 1:] += 0.5 * weight * path.specific_force(t - 0.5 * period * (1.0 - node)).T
     return Truth(t, sol.y.T, path.yaw(t), path.velocity(t).T, imu)
 
 

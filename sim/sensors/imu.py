@@ -1,8 +1,15 @@
 """Planar IMU: yaw rate and longitudinal/lateral specific force in ``gps_antenna``.
 
+An integrating IMU, as MEMS parts with a decimation filter are: ``observe`` is
+called at every physics step with that step's mean yaw rate and acceleration,
+and a capture reports the mean since the previous capture, so the sample
+stamped t describes the interval (t - 1/rate, t] (causal; the EKF integrates
+each sample up to its own stamp).
+
 Measurement at capture k, for each channel (gyro z, accel x, accel y)::
 
-    m[k] = true[k] + b[k] + sigma_d * v[k],   sigma_d = N / sqrt(dt_s),  v ~ N(0, 1)
+    m[k] = mean(true over the interval) + b[k] + sigma_d * v[k],
+    sigma_d = N / sqrt(dt_s),  v ~ N(0, 1)
     b[k+1] = b[k] + K * sqrt(dt) * w[k],      b[0] = 0 (calibrated at start)
 
 with N the white-noise density (gyro angle random walk, accelerometer velocity
@@ -103,10 +110,27 @@ class ImuSensor:
             cfg.accel_bias_walk, stream(seed, self.name, "accel_bias"), dim=2
         )
         self._last_t: float | None = None
+        self._sum = [0.0, 0.0, 0.0]
+        self._count = 0
+
+    def observe(self, truth: TruthSample) -> None:
+        """Integrate one physics step's motion (called at every step)."""
+        acc = self._sum
+        acc[0] += truth.yaw_rate
+        acc[1] += truth.accel_x
+        acc[2] += truth.accel_y
+        self._count += 1
 
     def capture(self, truth: TruthSample) -> Imu:
-        """The IMU sample of a capture at ``truth.t``."""
+        """The IMU sample of a capture at ``truth.t``: the mean since the last one."""
         cfg = self.config
+        if self._count:
+            n = self._count
+            yaw_rate, accel_x, accel_y = (v / n for v in self._sum)
+        else:  # captured without observing (a sensor used on its own)
+            yaw_rate, accel_x, accel_y = truth.yaw_rate, truth.accel_x, truth.accel_y
+        self._sum = [0.0, 0.0, 0.0]
+        self._count = 0
         dt = 0.0 if self._last_t is None else truth.t - self._last_t
         self._last_t = truth.t
         bg = float(self._gyro_bias.step(dt)[0])
@@ -116,9 +140,9 @@ class ImuSensor:
         wa = self._accel_white.standard_normal(2)
         return Imu(
             header=Header(truth.t, FRAME_GPS_ANTENNA),
-            yaw_rate=truth.yaw_rate + bg + sg * wg,
-            accel_x=truth.accel_x + float(ba[0]) + sa * float(wa[0]),
-            accel_y=truth.accel_y + float(ba[1]) + sa * float(wa[1]),
+            yaw_rate=yaw_rate + bg + sg * wg,
+            accel_x=accel_x + float(ba[0]) + sa * float(wa[0]),
+            accel_y=accel_y + float(ba[1]) + sa * float(wa[1]),
             yaw_rate_variance=sg * sg,
             accel_variance=sa * sa,
         )

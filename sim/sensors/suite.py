@@ -121,6 +121,7 @@ class SensorSuite:
         if self._last_t is not None and not t > self._last_t:
             raise ValueError(f"SensorSuite.step: time must increase, got {t} after {self._last_t}")
         self._last_t = t
+        self.imu.observe(truth)  # the integrating IMU sees every step
         for sensor, clock, queue in zip(self._sensors, self._clocks, self._queues, strict=True):
             if clock.due(t) and sensor.config.enabled:
                 message = sensor.capture(truth)

@@ -28,8 +28,10 @@ class TruthSample:
         antenna_pose: ``gps_antenna`` in ``reference`` (x, y [m], yaw [rad]);
             ``os_sensor`` has the same planar pose, 0.1 m lower.
         speed: forward speed of the body at the antenna, v_x [m/s].
-        yaw_rate: [rad/s], counter-clockwise positive.
-        accel_x: longitudinal specific force at the IMU (at the antenna) [m/s^2].
+        yaw_rate: mean over the last physics step [rad/s], counter-clockwise
+            positive (what an integrating gyro sees).
+        accel_x: longitudinal specific force at the IMU (at the antenna), mean
+            over the last physics step [m/s^2].
         accel_y: lateral specific force, positive to the left [m/s^2].
         cone_positions: (n, 2) cone positions in ``reference`` [m].
         cone_kinds: n kinds from ``CONE_COLOURS``.

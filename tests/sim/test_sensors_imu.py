@@ -75,3 +75,18 @@ def test_ideal_imu_is_exact() -> None:
     )
     assert (m.yaw_rate, m.accel_x, m.accel_y) == (-0.2, 0.7, 3.3)
     assert m.yaw_rate_variance == 0.0 and m.accel_variance == 0.0
+
+
+def test_integrating_imu_reports_the_interval_mean() -> None:
+    """At 100 Hz over 200 Hz steps a sample is the mean of the two steps it covers."""
+    imu = ImuSensor(get_profile("ideal").imu, seed=0)
+    pose = Pose2D(0.0, 0.0, 0.0)
+    steps = [(0.005, 1.0, 2.0, -1.0), (0.010, 3.0, 4.0, 1.0)]
+    for t, w, ax, ay in steps:
+        imu.observe(TruthSample(t, pose, yaw_rate=w, accel_x=ax, accel_y=ay))
+    msg = imu.capture(TruthSample(0.010, pose, yaw_rate=3.0, accel_x=4.0, accel_y=1.0))
+    assert_allclose([msg.yaw_rate, msg.accel_x, msg.accel_y], [2.0, 3.0, 0.0])
+    imu.observe(TruthSample(0.015, pose, yaw_rate=5.0))
+    imu.observe(TruthSample(0.020, pose, yaw_rate=7.0))
+    msg = imu.capture(TruthSample(0.020, pose, yaw_rate=7.0))
+    assert msg.yaw_rate == 6.0  # only the steps since the last capture
