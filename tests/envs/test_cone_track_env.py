@@ -134,3 +134,13 @@ def test_make_vec(mode: str) -> None:
         assert np.all(np.isfinite(obs))
     finally:
         vec.close()
+
+
+def test_human_mode_without_pygame_names_the_extra(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Without pygame, human rendering fails with DependencyNotInstalled naming the extra."""
+    import sys
+
+    monkeypatch.setitem(sys.modules, "pygame", None)  # import pygame -> ImportError
+    env = ConeTrackEnv(render_mode="human")
+    with pytest.raises(gym.error.DependencyNotInstalled, match=r"conesim\[render\]"):
+        env.reset(seed=0)
