@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import time
 
 import numpy as np
@@ -149,7 +150,9 @@ def main() -> None:
     args = parser.parse_args()
     repeats = 100 if args.quick else 400
 
-    print("== planning latency per detection (classify + plan + speed profile) [ms]")
+    load = " ".join(f"{x:.2f}" for x in os.getloadavg())
+    print(f"== planning latency per detection (classify + plan + speed profile) [ms], "
+          f"load average {load}")  # fmt: skip
     print(f"{'cones':>6} {'in view':>8} {'classify med':>13} {'plan med':>9} "
           f"{'total med':>10} {'total p99':>10}  targets: med <= 0.5, p99 <= 2")  # fmt: skip
     for n in (20, 40, 80):

@@ -42,10 +42,17 @@ Steps of ``reference_path_planning`` that work on cones in ``os_sensor``:
 4. ``boundary_edges``: same-side edges along one boundary (offset difference
    below the minimum width, same stretch of track), which a sound path may not
    cross.
+
+Written for speed (it runs per detection on a few dozen cones, where numpy's
+per-call overhead dominates): each step gathers a cone attribute once and
+reuses it, medians are taken with one sort (``median``, the same number as
+``numpy.median``), and a view with no virtual partner skips building and
+joining them.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -53,9 +60,17 @@ from numpy.typing import NDArray
 from scipy.spatial import Delaunay, QhullError
 
 from planner.config import MidlineConfig
-from planner.geometry import FloatArray, IntArray, StationAxis
+from planner.geometry import FloatArray, IntArray, StationAxis, station_difference
 
 BoolArray = NDArray[np.bool_]
+
+_TO_LEFT = np.array([-1.0, 1.0])  # (t_y, t_x) * _TO_LEFT: the left normal of t
+
+# The fields of an empty cone set (``_no_cones``).
+_NO_POINTS = np.zeros((0, 2))
+_NO_SIDES = np.zeros(0, dtype=np.int8)
+_NO_VALUES = np.zeros(0)
+_NO_FLAGS = np.zeros(0, dtype=bool)
 
 
 @dataclass(frozen=True, slots=True)
@@ -89,24 +104,36 @@ class ConeSet:
 
     def select(self, keep: BoolArray | IntArray) -> ConeSet:
         """The cones where ``keep`` (mask or indices)."""
+        if keep.dtype == np.bool_:  # compress and take: faster than [] on (n, 2)
+            return ConeSet(
+                points=self.points.compress(keep, axis=0),
+                side=self.side.compress(keep),
+                offset=self.offset.compress(keep),
+                station=self.station.compress(keep),
+                tangent=self.tangent.compress(keep, axis=0),
+                virtual=self.virtual.compress(keep),
+                axis=self.axis,
+            )
         return ConeSet(
-            points=self.points[keep],
-            side=self.side[keep],
-            offset=self.offset[keep],
-            station=self.station[keep],
-            tangent=self.tangent[keep],
-            virtual=self.virtual[keep],
+            points=self.points.take(keep, axis=0),
+            side=self.side.take(keep),
+            offset=self.offset.take(keep),
+            station=self.station.take(keep),
+            tangent=self.tangent.take(keep, axis=0),
+            virtual=self.virtual.take(keep),
             axis=self.axis,
         )
 
     def join(self, other: ConeSet) -> ConeSet:
-        """This set followed by ``other``."""
+        """This set followed by ``other`` (this set itself when ``other`` is empty)."""
+        if len(other) == 0:
+            return self
         return ConeSet(
-            points=np.vstack([self.points, other.points]),
+            points=np.concatenate([self.points, other.points]),
             side=np.concatenate([self.side, other.side]),
             offset=np.concatenate([self.offset, other.offset]),
             station=np.concatenate([self.station, other.station]),
-            tangent=np.vstack([self.tangent, other.tangent]),
+            tangent=np.concatenate([self.tangent, other.tangent]),
             virtual=np.concatenate([self.virtual, other.virtual]),
             axis=self.axis,
         )
@@ -158,13 +185,19 @@ class PairTable:
 
 def pair_table(cones: ConeSet, config: MidlineConfig) -> PairTable:
     """The (left, right) tables of :class:`PairTable`."""
-    left = np.flatnonzero(cones.side > 0)
-    right = np.flatnonzero(cones.side < 0)
-    pl, pr = cones.points[left], cones.points[right]
+    left = (cones.side > 0).nonzero()[0]
+    right = (cones.side < 0).nonzero()[0]
+    pl, pr = cones.points.take(left, axis=0), cones.points.take(right, axis=0)
     dist = np.hypot(np.subtract.outer(pl[:, 0], pr[:, 0]), np.subtract.outer(pl[:, 1], pr[:, 1]))
-    gap = cones.station_gap(left[:, None], right[None, :])
-    span = np.subtract.outer(cones.offset[left], cones.offset[right])
-    middle = 0.5 * np.add.outer(cones.offset[left], cones.offset[right])
+    axis = cones.axis
+    gap = np.abs(
+        station_difference(
+            cones.station[right][None, :], cones.station[left][:, None], axis.length, axis.closed
+        )
+    )
+    ol, or_ = cones.offset[left], cones.offset[right]
+    span = np.subtract.outer(ol, or_)
+    middle = 0.5 * np.add.outer(ol, or_)
     return PairTable(left, right, dist, gap <= config.max_station_gap, span, middle)
 
 
@@ -199,25 +232,40 @@ def estimate_track(pairs: PairTable, config: MidlineConfig) -> TrackEstimate:
     difference and the mean offset. Fewer than ``min_width_samples`` samples
     give the nominal width and the global path as the middle.
     """
-    nominal = TrackEstimate(config.nominal_track_width, 0.0, measured=False)
+    span = pairs.span
     valid = (
         pairs.same_stretch
-        & (pairs.span >= config.min_track_width)
-        & (pairs.span <= config.max_track_width)
+        & (span >= config.min_track_width)
+        & (span <= config.max_track_width)
         & (pairs.dist <= config.max_bridge_length)
     )
-    if not np.any(valid):
-        return nominal
+    rows = np.nonzero(valid.any(axis=1))[0]
+    cols = np.nonzero(valid.any(axis=0))[0]
+    if len(rows) == 0 or len(rows) + len(cols) < config.min_width_samples:
+        return TrackEstimate(config.nominal_track_width, 0.0, measured=False)
     masked = np.where(valid, pairs.dist, np.inf)
-    rows = np.flatnonzero(valid.any(axis=1))
-    cols = np.flatnonzero(valid.any(axis=0))
-    row_pick = (rows, np.argmin(masked[rows], axis=1))
-    col_pick = (np.argmin(masked[:, cols], axis=0), cols)
-    if len(rows) + len(cols) < config.min_width_samples:
-        return nominal
-    span = np.concatenate([pairs.span[row_pick], pairs.span[col_pick]])
-    middle = np.concatenate([pairs.middle[row_pick], pairs.middle[col_pick]])
-    return TrackEstimate(float(np.median(span)), float(np.median(middle)), measured=True)
+    width = valid.shape[1]
+    # Flat indices of each row's nearest valid partner, then each column's.
+    picks = np.concatenate(
+        [rows * width + masked.argmin(axis=1)[rows], masked.argmin(axis=0)[cols] * width + cols]
+    )
+    return TrackEstimate(median(span.take(picks)), median(pairs.middle.take(picks)), measured=True)
+
+
+def median(values: FloatArray) -> float:
+    """``float(numpy.median(values))`` of a non-empty 1-D array, with one sort.
+
+    The middle value, or the mean of the two middle values as ``(a + b) / 2``
+    (what ``numpy.median`` computes); NaN if any value is NaN.
+    """
+    ordered = np.sort(values)  # NaNs last
+    n = len(ordered)
+    half = n // 2
+    if math.isnan(ordered[-1]):
+        return math.nan
+    if n % 2:
+        return float(ordered[half])
+    return float((ordered[half - 1] + ordered[half]) / 2.0)
 
 
 def virtual_partners(
@@ -241,18 +289,33 @@ def virtual_partners(
     # On its boundary line: a stray or misclassified cone gets no partner.
     boundary = np.abs(track.boundary_offset(cones)) <= config.partner_offset_tolerance
     need = ~near & boundary
-    t = cones.tangent[need]
-    left_normal = np.column_stack([-t[:, 1], t[:, 0]])
-    side = cones.side[need]
+    if not need.any():
+        return _no_cones(cones.axis)
+    alone = cones.select(need)
+    t, side = alone.tangent, alone.side
+    left_normal = t[:, ::-1] * _TO_LEFT  # (-t_y, t_x)
     shift = side[:, None] * track.width * left_normal
     return ConeSet(
-        points=cones.points[need] - shift,
+        points=alone.points - shift,
         side=(-side).astype(np.int8),
-        offset=cones.offset[need] - side * track.width,
-        station=cones.station[need],
+        offset=alone.offset - side * track.width,
+        station=alone.station,
         tangent=t,
         virtual=np.ones(len(t), dtype=bool),
         axis=cones.axis,
+    )
+
+
+def _no_cones(axis: StationAxis) -> ConeSet:
+    """An empty cone set (sharing arrays of no element, which nothing can change)."""
+    return ConeSet(
+        points=_NO_POINTS,
+        side=_NO_SIDES,
+        offset=_NO_VALUES,
+        station=_NO_VALUES,
+        tangent=_NO_POINTS,
+        virtual=_NO_FLAGS,
+        axis=axis,
     )
 
 
@@ -271,10 +334,16 @@ def delaunay_edges(points: FloatArray) -> IntArray:
         tri = Delaunay(points)
     except QhullError:
         return np.zeros((0, 2), dtype=np.intp)
+    # Each vertex's neighbours (scipy's CSR lists, in their order); the
+    # lists hold every edge twice, i < j keeps it once. Measured faster than
+    # deduplicating the edges of ``tri.simplices`` in the same order.
     indptr, indices = tri.vertex_neighbor_vertices
-    rows = np.repeat(np.arange(n), np.diff(indptr))
+    rows = np.repeat(np.arange(n), indptr[1:] - indptr[:-1])
     keep = rows < indices
-    return np.column_stack([rows[keep], indices[keep]]).astype(np.intp)
+    edges = np.empty((int(np.count_nonzero(keep)), 2), dtype=np.intp)
+    edges[:, 0] = rows[keep]
+    edges[:, 1] = indices[keep]
+    return edges
 
 
 def find_bridges(
@@ -289,47 +358,52 @@ def find_bridges(
         track: the width in view; its width is checked only when measured.
     """
     i, j = edges[:, 0], edges[:, 1]
-    across = cones.side[i] != cones.side[j]
+    side_i = cones.side[i]
+    across = side_i != cones.side[j]
     i, j = i[across], j[across]
-    swap = cones.side[i] < 0
+    swap = side_i[across] < 0
     left = np.where(swap, j, i)
     right = np.where(swap, i, j)
-    vec = cones.points[right] - cones.points[left]
+    start = cones.points.take(left, axis=0)
+    vec = cones.points.take(right, axis=0) - start
     length = np.hypot(vec[:, 0], vec[:, 1])
     span = cones.offset[left] - cones.offset[right]
+    station = cones.station[left]
+    ds = cones.axis.difference(cones.station[right], station)
     valid = (
         (span >= config.min_track_width)
         & (span <= config.max_track_width)
         & (length <= config.max_bridge_length)
-        & (cones.station_gap(left, right) <= config.max_station_gap)
-        & ~(cones.virtual[left] & cones.virtual[right])
+        & (np.abs(ds) <= config.max_station_gap)
     )
+    if cones.virtual.any():
+        valid &= ~(cones.virtual[left] & cones.virtual[right])
     if track is not None and track.measured:
         valid &= np.abs(span - track.width) <= config.width_tolerance
     used = valid.copy()
-    if config.bridge_selection == "shortest" and np.any(valid):
+    if config.bridge_selection == "shortest" and valid.any():
         best = np.full(len(cones), np.inf)
-        np.minimum.at(best, left[valid], length[valid])
-        np.minimum.at(best, right[valid], length[valid])
+        shortest = length[valid]
+        np.minimum.at(best, left[valid], shortest)
+        np.minimum.at(best, right[valid], shortest)
         used = valid & ((length <= best[left]) | (length <= best[right]))
-    ds = cones.axis.difference(cones.station[right], cones.station[left])
     return Bridges(
         left=left,
         right=right,
         length=length,
         valid=valid,
         used=used,
-        midpoints=cones.points[left] + 0.5 * vec,
-        station=cones.station[left] + 0.5 * ds,
+        midpoints=start + 0.5 * vec,
+        station=station + 0.5 * ds,
     )
 
 
 def boundary_edges(cones: ConeSet, edges: IntArray, config: MidlineConfig) -> IntArray:
     """Step 4: same-side edges (e, 2) that run along one boundary of one stretch of track."""
     i, j = edges[:, 0], edges[:, 1]
-    along = (
-        (cones.side[i] == cones.side[j])
-        & (np.abs(cones.offset[i] - cones.offset[j]) < config.min_track_width)
-        & (cones.station_gap(i, j) <= config.max_station_gap)
+    along = cones.side[i] == cones.side[j]
+    i, j = i[along], j[along]
+    along[along] = (np.abs(cones.offset[i] - cones.offset[j]) < config.min_track_width) & (
+        cones.station_gap(i, j) <= config.max_station_gap
     )
-    return edges[along]
+    return edges.compress(along, axis=0)

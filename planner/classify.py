@@ -31,6 +31,10 @@ the bridges such a cone would make.
 
 Cones with a non-finite coordinate are dropped and counted (messages do not
 validate their numbers; ``localization.messages``).
+
+Written for speed (it runs per detection): step 2's two projections share one
+k-d tree query (``PathProjector.project_around``), and the default settings
+are built once.
 """
 
 from __future__ import annotations
@@ -48,6 +52,9 @@ from planner.geometry import FloatArray, IntArray, PathProjector, StationAxis
 
 LEFT = 1
 RIGHT = -1
+_LEFT8, _RIGHT8 = np.int8(LEFT), np.int8(RIGHT)
+_ORIGIN = np.zeros((1, 2))  # the sensor's origin, mapped with the cones
+_DEFAULT_CONFIG = ClassifierConfig()  # frozen: built once
 
 
 @dataclass(frozen=True, slots=True)
@@ -139,18 +146,25 @@ def cones_to_reference(
     Raises:
         The frame tree's errors (e.g. ``ExtrapolationError``) unchanged.
     """
+    mapped, finite, stamp = _ground_to_reference(detections, buffer, time, reference_frame)
+    return mapped[:-1], mapped[-1], finite, stamp
+
+
+def _ground_to_reference(
+    detections: ConeDetections, buffer: Buffer, time: float | None, reference_frame: str
+) -> tuple[FloatArray, NDArray[np.bool_], float]:
+    """``cones_to_reference`` with the sensor's origin as the last row of the cones."""
     stamp = detections.header.stamp if time is None else time
     transform = buffer.lookup_transform(reference_frame, detections.header.frame_id, stamp)
     xy = np.asarray(detections.points, dtype=float)[:, :2]
-    finite = np.all(np.isfinite(xy), axis=1)
-    ground = np.vstack([xy[finite], np.zeros((1, 2))])
-    mapped = transform.transform_points(ground)
-    return mapped[:-1], mapped[-1], finite, transform.stamp
+    finite = np.isfinite(xy).all(axis=1)
+    ground = np.concatenate([xy if finite.all() else xy.compress(finite, axis=0), _ORIGIN])
+    return transform.transform_points(ground), finite, transform.stamp
 
 
 def side_of_path(offset: FloatArray) -> NDArray[np.int8]:
     """Step 3, the seed's rule: ``LEFT`` where the cross product is > 0, else ``RIGHT``."""
-    return np.where(offset > 0.0, LEFT, RIGHT).astype(np.int8)
+    return np.where(offset > 0.0, _LEFT8, _RIGHT8)
 
 
 def side_from_colour(
@@ -193,21 +207,18 @@ def classify_cones_by_side(
     Raises:
         The frame tree's errors unchanged (the autopilot decides what to do).
     """
-    config = config or ClassifierConfig()
+    config = config or _DEFAULT_CONFIG
     projector = path if isinstance(path, PathProjector) else PathProjector(path)
-    cones, sensor, finite, stamp = cones_to_reference(detections, buffer, time, reference_frame)
-    windowed = config.window_penalty > 0.0
-    centre = station_hint
-    if centre is None and windowed:
-        centre = float(projector.project(sensor[None, :]).station[0])
-    window = None
-    if windowed and centre is not None:
-        window = (centre - config.window_back, centre + config.window_ahead)
-    both = projector.project(np.vstack([cones, sensor[None, :]]), window, config.window_penalty)
+    # The cones and, last, the sensor, whose station is the window's origin
+    # (``station_hint``, or the sensor's own projection onto the whole path).
+    both, finite, stamp = _ground_to_reference(detections, buffer, time, reference_frame)
+    cones = both[:-1]
+    proj = projector.project_around(
+        both, config.window_back, config.window_ahead, config.window_penalty, station_hint
+    )
     n = len(cones)
-    proj = both.select(slice(0, n))
-    sensor_station = float(both.station[n])
-    side = side_of_path(proj.offset)
+    offset = proj.offset[:n]
+    side = side_of_path(offset)
     by_colour = np.zeros(n, dtype=bool)
     disagreements = 0
     if config.mode == "colour":
@@ -215,17 +226,18 @@ def classify_cones_by_side(
         by_colour = named != 0
         disagreements = int(np.count_nonzero(by_colour & (named != side)))
         side = np.where(by_colour, named, side).astype(np.int8)
+    rejected = len(finite) - n
     return ClassifiedCones(
         header=Header(stamp, reference_frame),
         points=cones,
         side=side,
-        offset=proj.offset,
-        station=proj.station,
-        tangent=proj.tangent,
-        index=np.flatnonzero(finite),
+        offset=offset,
+        station=proj.station[:n],
+        tangent=proj.tangent[:n],
+        index=np.arange(n) if rejected == 0 else finite.nonzero()[0],
         by_colour=by_colour,
-        sensor_station=sensor_station,
+        sensor_station=float(proj.station[n]),
         axis=projector.axis,
-        rejected=int(np.count_nonzero(~finite)),
+        rejected=rejected,
         colour_disagreements=disagreements,
     )

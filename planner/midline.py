@@ -23,6 +23,10 @@ the current frame through the frame tree (old ``os_sensor`` at the old stamp
 -> ``reference`` -> ``os_sensor`` now), drops what lies behind the car, and the
 plan reports ``PlanStatus.FALLBACK`` with the reason; with nothing to carry
 forward it is ``PlanStatus.FAILED`` with an empty path.
+
+Written for speed (per detection): the default settings are built once, and
+step 6 tests the path against the boundary with ``polyline_crosses``, which
+only examines the path segments that straddle a boundary edge's line.
 """
 
 from __future__ import annotations
@@ -49,11 +53,13 @@ from planner.bridges import (
 )
 from planner.classify import LEFT, RIGHT, ClassifiedCones
 from planner.config import MidlineConfig, SpeedProfileConfig
-from planner.geometry import FloatArray, arc_length, segments_cross
+from planner.geometry import FloatArray, arc_length, polyline_crosses
 from planner.messages import BridgeLines, LocalPath, Midpoints, Waypoints
 from planner.ordering import ordered_midpoints
 from planner.speed_profile import speed_profile
 from planner.spline import fit_path
+
+_DEFAULT_CONFIG = MidlineConfig()  # frozen: built once
 
 
 class PlanStatus(StrEnum):
@@ -160,11 +166,12 @@ def cones_to_sensor(
 def in_view(cones: ConeSet, config: MidlineConfig) -> NDArray[np.bool_]:
     """Step 2a: (n,) mask of the cones in range and at a boundary's distance from the path."""
     x, y = cones.points[:, 0], cones.points[:, 1]
+    offset = np.abs(cones.offset)
     return (
         (x >= config.min_x)
         & (np.hypot(x, y) <= config.max_range)
-        & (np.abs(cones.offset) >= config.min_boundary_offset)
-        & (np.abs(cones.offset) <= config.max_boundary_offset)
+        & (offset >= config.min_boundary_offset)
+        & (offset <= config.max_boundary_offset)
     )
 
 
@@ -177,19 +184,24 @@ def boundary_cones(
         The kept cones, their pair table, the width and middle in view, and
         how many cones were dropped.
     """
-    real = cones.select(in_view(cones, config))
+    keep = in_view(cones, config)
+    real = cones if keep.all() else cones.select(keep)
     pairs = pair_table(real, config)
     track = estimate_track(pairs, config)
     if track.measured:
         on_boundary = track.boundary_offset(real) >= -config.boundary_tolerance
-        if not np.all(on_boundary):
+        if not on_boundary.all():
             real = real.select(on_boundary)
             pairs = pair_table(real, config)
     return real, pairs, track, len(cones) - len(real)
 
 
 def check_path(
-    path: FloatArray, n_midpoints: int, boundary: FloatArray, config: MidlineConfig
+    path: FloatArray,
+    n_midpoints: int,
+    boundary: FloatArray,
+    config: MidlineConfig,
+    length: float | None = None,
 ) -> str:
     """Step 6: why the path is not sound, or "" when it is.
 
@@ -198,18 +210,18 @@ def check_path(
         n_midpoints: ordered midpoints it was fitted through.
         boundary: (e, 2, 2) boundary edges it may not cross [m].
         config: the thresholds.
+        length: the path's length [m] if known (``arc_length(path)[-1]``).
     """
     if n_midpoints < 2:
         return f"{n_midpoints} ordered midpoints (need 2)"
-    length = float(arc_length(path)[-1])
+    if length is None:
+        length = float(arc_length(path)[-1])
     if length < config.min_path_length:
         return f"path {length:.2f} m long (need {config.min_path_length} m)"
-    start = float(np.hypot(*path[0]))
+    start = float(np.hypot(path[0, 0], path[0, 1]))
     if start > config.max_start_distance:
         return f"path starts {start:.2f} m away (max {config.max_start_distance} m)"
-    if len(boundary) and np.any(
-        segments_cross(path[:-1], path[1:], boundary[:, 0], boundary[:, 1])
-    ):
+    if len(boundary) and polyline_crosses(path, boundary[:, 0], boundary[:, 1]):
         return "path crosses a track boundary"
     return ""
 
@@ -271,7 +283,7 @@ def reference_path_planning(
     Raises:
         The frame tree's errors when ``cones`` cannot be mapped at ``time``.
     """
-    config = config or MidlineConfig()
+    config = config or _DEFAULT_CONFIG
     all_cones, stamp = cones_to_sensor(cones, buffer, time, sensor_frame)
     real, pairs, track, dropped = boundary_cones(all_cones, config)
     cone_set = real.join(virtual_partners(real, pairs, config, track))
@@ -279,20 +291,23 @@ def reference_path_planning(
     bridges = find_bridges(cone_set, edges, config, track)
     midpoints = ordered_midpoints(bridges, cones.sensor_station, cones.axis, config)
     path = fit_path(midpoints, config)
-    boundary = cone_set.points[boundary_edges(cone_set, edges, config)]
-    reason = check_path(path, len(midpoints), boundary, config)
+    boundary = cone_set.points.take(boundary_edges(cone_set, edges, config), axis=0)
+    s = arc_length(path)  # for the check and the speed profile
+    reason = check_path(path, len(midpoints), boundary, config, float(s[-1]))
     status = PlanStatus.OK
+    path_s: FloatArray | None = s
     if reason:
         carried = carry_path_forward(previous, buffer, stamp, cones.header.frame_id, sensor_frame)
         status = PlanStatus.FAILED if carried is None else PlanStatus.FALLBACK
         path = np.zeros((0, 2)) if carried is None else carried
+        path_s = None
     return LocalPlan(
         header=Header(stamp, sensor_frame),
         cones=cone_set,
         bridges=bridges,
         midpoints=midpoints,
         path=path,
-        speeds=speed_profile(path, speed_config, v_start),
+        speeds=speed_profile(path, speed_config, v_start, s=path_s),
         status=status,
         reason=reason,
         track=track,

@@ -17,6 +17,9 @@ one stretch of track, using each midpoint's station along the global path
   it (skipped).
 
 The chain stops when no midpoint qualifies.
+
+Written for speed: the step matrix is built with a few numpy calls and the
+walk itself is plain Python over each row's allowed steps, nearest first.
 """
 
 from __future__ import annotations
@@ -39,15 +42,15 @@ def start_index(
     if len(midpoints) == 0:
         return None
     ahead = axis.difference(station, sensor_station)
+    x = midpoints[:, 0]
     ok = (
-        (midpoints[:, 0] > config.start_min_x)
+        (x > config.start_min_x)
         & (ahead >= -config.start_station_back)
         & (ahead <= config.start_station_ahead)
     )
-    if not np.any(ok):
+    if not ok.any():
         return None
-    dist = np.where(ok, np.hypot(midpoints[:, 0], midpoints[:, 1]), np.inf)
-    return int(np.argmin(dist))
+    return int(np.where(ok, np.hypot(x, midpoints[:, 1]), np.inf).argmin())
 
 
 def chain_nearest(
@@ -69,25 +72,30 @@ def chain_nearest(
         dist,
         np.inf,
     )
-    # Each row's allowed steps, nearest first; the walk itself is plain Python,
+    # Each row's allowed steps, nearest first, as Python lists (only as many
+    # columns as the longest row allows); the walk itself is plain Python,
     # cheaper than a numpy call per step for the few dozen midpoints in view.
-    ranked = np.argsort(step, axis=1, kind="stable")
     allowed = np.isfinite(step).sum(axis=1)
-    candidates = [row[:count] for row, count in zip(ranked.tolist(), allowed.tolist(), strict=True)]
-    lengths = step.tolist()
+    ranked = step.argsort(axis=1, kind="stable")[:, : int(allowed.max())]
+    lengths = step[np.arange(len(step))[:, None], ranked].tolist()
+    candidates = ranked.tolist()
+    counts = allowed.tolist()
     visited = [False] * len(midpoints)
     visited[first] = True
     order = [first]
     current = first
     while True:
-        nxt = next((j for j in candidates[current] if not visited[j]), None)
-        if nxt is None:
+        row = candidates[current]
+        for k in range(counts[current]):  # the nearest unvisited allowed step
+            if not visited[row[k]]:
+                break
+        else:
             break
-        visited[nxt] = True
-        if lengths[current][nxt] < config.min_midpoint_spacing:
+        visited[row[k]] = True
+        if lengths[current][k] < config.min_midpoint_spacing:
             continue
-        order.append(nxt)
-        current = nxt
+        current = row[k]
+        order.append(current)
     return np.asarray(order, dtype=np.intp)
 
 
@@ -120,8 +128,8 @@ def ordered_midpoints(
     bridges: Bridges, sensor_station: float, axis: StationAxis, config: MidlineConfig
 ) -> FloatArray:
     """The used bridges' midpoints (m, 2) [m], in driving order from the one in front."""
-    used = np.flatnonzero(bridges.used)
+    used = bridges.used.nonzero()[0]
     order = order_midpoints(
-        bridges.midpoints[used], bridges.station[used], sensor_station, axis, config
+        bridges.midpoints.take(used, axis=0), bridges.station[used], sensor_station, axis, config
     )
-    return bridges.midpoints[used[order]]
+    return bridges.midpoints.take(used[order], axis=0)

@@ -17,6 +17,9 @@ For waypoints p_0..p_{n-1} at arc lengths s_i:
 4. ``backward_pass`` (brake limit a_b), the same from the end:
    v_i^2 = min_{j>=i} (w_j + 2 a_b (s_j - s_i)). With ``horizon_stop`` the last
    waypoint's speed is 0: the car can always stop on the path it has seen.
+
+Written for speed (per plan, on ~60 waypoints): the step vectors and lengths
+are computed once for the arc length and the curvature.
 """
 
 from __future__ import annotations
@@ -24,20 +27,29 @@ from __future__ import annotations
 import numpy as np
 
 from planner.config import SpeedProfileConfig
-from planner.geometry import FloatArray, arc_length
+from planner.geometry import FloatArray
+
+_DEFAULT_CONFIG = SpeedProfileConfig()  # frozen: built once
 
 
 def menger_curvature(points: FloatArray) -> FloatArray:
     """Signed curvature (n,) [1/m] of an (n, 2) polyline, + turning left."""
+    step = points[1:] - points[:-1]
+    return _menger(points, step, np.hypot(step[:, 0], step[:, 1]))
+
+
+def _menger(points: FloatArray, step: FloatArray, step_length: FloatArray) -> FloatArray:
+    """``menger_curvature`` given the (n - 1, 2) steps and their lengths."""
     n = len(points)
     if n < 3:
         return np.zeros(n)
-    a, b, c = points[:-2], points[1:-1], points[2:]
-    ab, bc, ac = b - a, c - b, c - a
+    ab, bc, ac = step[:-1], step[1:], points[2:] - points[:-2]
     cross = ab[:, 0] * bc[:, 1] - ab[:, 1] * bc[:, 0]
-    denom = np.hypot(*ab.T) * np.hypot(*bc.T) * np.hypot(*ac.T)
-    inner = np.divide(2.0 * cross, denom, out=np.zeros(n - 2), where=denom > 0.0)
-    return np.concatenate([inner[:1], inner, inner[-1:]])
+    denom = step_length[:-1] * step_length[1:] * np.hypot(ac[:, 0], ac[:, 1])
+    kappa = np.zeros(n)  # 0 where the division is skipped
+    np.divide(2.0 * cross, denom, out=kappa[1:-1], where=denom > 0.0)
+    kappa[0], kappa[-1] = kappa[1], kappa[-2]
+    return kappa
 
 
 def curvature_limit(kappa: FloatArray, config: SpeedProfileConfig) -> FloatArray:
@@ -49,20 +61,24 @@ def curvature_limit(kappa: FloatArray, config: SpeedProfileConfig) -> FloatArray
 
 def forward_pass(s: FloatArray, v_limit: FloatArray, a_drive: float) -> FloatArray:
     """Step 3: speeds (n,) [m/s] reachable accelerating at most ``a_drive`` [m/s^2]."""
-    w = v_limit**2 - 2.0 * a_drive * s
-    return np.sqrt(np.maximum(2.0 * a_drive * s + np.minimum.accumulate(w), 0.0))
+    reach = 2.0 * a_drive * s
+    w = v_limit**2 - reach
+    return np.sqrt(np.maximum(reach + np.minimum.accumulate(w), 0.0))
 
 
 def backward_pass(s: FloatArray, v_limit: FloatArray, a_brake: float) -> FloatArray:
     """Step 4: speeds (n,) [m/s] from which braking at ``a_brake`` [m/s^2] meets the limits."""
-    w = (v_limit**2 + 2.0 * a_brake * s)[::-1]
-    return np.sqrt(np.maximum(np.minimum.accumulate(w)[::-1] - 2.0 * a_brake * s, 0.0))
+    reach = 2.0 * a_brake * s
+    w = (v_limit**2 + reach)[::-1]
+    return np.sqrt(np.maximum(np.minimum.accumulate(w)[::-1] - reach, 0.0))
 
 
 def speed_profile(
     points: FloatArray,
     config: SpeedProfileConfig | None = None,
     v_start: float | None = None,
+    *,
+    s: FloatArray | None = None,
 ) -> FloatArray:
     """Target speed (n,) [m/s] at each waypoint of an (n, 2) path [m].
 
@@ -70,13 +86,18 @@ def speed_profile(
         points: the waypoints, in driving order.
         config: the limits.
         v_start: speed at the first waypoint [m/s]; None leaves it free.
+        s: ``arc_length(points)`` [m] if known.
     """
-    config = config or SpeedProfileConfig()
+    config = config or _DEFAULT_CONFIG
     n = len(points)
     if n == 0:
         return np.zeros(0)
-    s = arc_length(points)
-    v = curvature_limit(menger_curvature(points), config)
+    step = points[1:] - points[:-1]
+    step_length = np.hypot(step[:, 0], step[:, 1])
+    if s is None:
+        s = np.zeros(n)
+        np.cumsum(step_length, out=s[1:])  # arc_length(points)
+    v = curvature_limit(_menger(points, step, step_length), config)
     if v_start is not None:
         v[0] = min(v[0], max(v_start, 0.0))
     v = forward_pass(s, v, config.a_drive)

@@ -1,0 +1,224 @@
+"""The code written for speed gives the same numbers as the straightforward code.
+
+Each test compares a shortcut of the planner's hot path with the plain
+formulation it replaces (kept here as the reference), exactly: same
+floating-point operations per element, so the results are bit for bit equal.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_array_equal
+from scipy.interpolate import BSpline, splev, splprep
+from scipy.spatial import Delaunay
+
+from localization.global_path import global_path_from_centreline
+from planner import MidlineConfig
+from planner.bridges import ConeSet, delaunay_edges, median
+from planner.geometry import (
+    PathProjector,
+    StationAxis,
+    arc_length,
+    polyline_crosses,
+    segments_cross,
+)
+from planner.midline import check_path
+from planner.ordering import chain_nearest
+from planner.speed_profile import menger_curvature, speed_profile
+
+
+def loop_path(closed: bool = True) -> PathProjector:
+    """A wobbly loop (or its open version) of 400 points."""
+    s = np.linspace(0.0, 2 * math.pi, 400, endpoint=False)
+    xy = np.column_stack([30 * np.cos(s) + 3 * np.cos(7 * s), 20 * np.sin(s)])
+    return PathProjector(global_path_from_centreline(xy, closed=closed))
+
+
+@pytest.mark.parametrize("closed", [True, False])
+@pytest.mark.parametrize("penalty", [0.0, 2.0, math.inf])
+@pytest.mark.parametrize("hint", [None, 5.0, 150.0])
+def test_project_around_is_the_two_step_projection(
+    closed: bool, penalty: float, hint: float | None
+) -> None:
+    """One shared k-d tree query: the sensor projected alone, then all with the window."""
+    projector = loop_path(closed)
+    rng = np.random.default_rng(1)
+    for _ in range(20):
+        points = rng.uniform(-40.0, 40.0, (30, 2))
+        centre = hint
+        if centre is None and penalty > 0.0:
+            centre = float(projector.project(points[-1:]).station[0])
+        window = None if centre is None else (centre - 20.0, centre + 35.0)
+        expected = projector.project(points, window, penalty)
+        got = projector.project_around(points, 20.0, 35.0, penalty, hint)
+        for name in ("foot", "segment", "station", "offset", "tangent", "distance"):
+            assert_array_equal(getattr(got, name), getattr(expected, name), err_msg=name)
+
+
+def test_polyline_crosses_is_any_segment_crossing() -> None:
+    """The straddle prefilter finds exactly the crossings of the full pairwise test."""
+    rng = np.random.default_rng(2)
+    for trial in range(300):
+        path = np.cumsum(rng.normal(0.0, 1.0, (rng.integers(1, 40), 2)), axis=0)
+        b0 = rng.uniform(-8.0, 8.0, (rng.integers(0, 30), 2))
+        b1 = b0 + rng.normal(0.0, 3.0, b0.shape)
+        if trial % 3 == 0 and len(b0) and len(path) > 1:  # touching: ends on the path
+            b0[0] = path[1]
+        expected = len(path) > 1 and bool(np.any(segments_cross(path[:-1], path[1:], b0, b1)))
+        assert polyline_crosses(path, b0, b1) == expected
+
+
+def test_bspline_evaluation_is_splev() -> None:
+    """``BSpline.construct_fast`` on splprep's knots gives splev's numbers, bit for bit."""
+    rng = np.random.default_rng(3)
+    for trial in range(200):
+        m = int(rng.integers(4, 30))
+        x = np.cumsum(rng.uniform(1.0, 5.0, m))
+        y = np.cumsum(rng.normal(0.0, 1.0, m))
+        k = min(int(rng.integers(1, 4)), m - 1)
+        tck, _ = splprep(np.vstack([x, y]), s=0.0 if trial % 2 else 0.01 * m, k=k)
+        u = np.concatenate([np.linspace(0.0, 1.0, 4 * m), rng.uniform(0.0, 1.0, 20)])
+        spline = BSpline.construct_fast(tck[0], np.column_stack(tck[1]), tck[2])
+        assert_array_equal(spline(u), np.column_stack(splev(u, tck)))
+
+
+def test_median_is_numpy_median() -> None:
+    """Odd and even counts, repeated values and NaN."""
+    rng = np.random.default_rng(4)
+    for n in range(1, 40):
+        values = np.round(rng.normal(0.0, 2.0, n), 1 if n % 3 else 6)
+        assert median(values) == float(np.median(values))
+    assert math.isnan(median(np.array([1.0, math.nan, 2.0])))
+
+
+def test_arc_length_small_and_random() -> None:
+    """The cumulative sum of step lengths, [0] for no or one point."""
+    assert arc_length(np.zeros((0, 2))).tolist() == [0.0]
+    assert arc_length(np.ones((1, 2))).tolist() == [0.0]
+    points = np.random.default_rng(5).normal(0.0, 3.0, (50, 2))
+    expected = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(points, axis=0).T))])
+    assert_array_equal(arc_length(points), expected)
+
+
+def test_cone_set_select_and_join() -> None:
+    """Mask and indices select what fancy indexing does; joining nothing is the same set."""
+    rng = np.random.default_rng(6)
+    n = 12
+    cones = ConeSet(
+        points=rng.normal(size=(n, 2)),
+        side=np.where(rng.random(n) > 0.5, 1, -1).astype(np.int8),
+        offset=rng.normal(size=n),
+        station=rng.uniform(0.0, 50.0, n),
+        tangent=rng.normal(size=(n, 2)),
+        virtual=rng.random(n) > 0.7,
+        axis=StationAxis(100.0, False),
+    )
+    mask = rng.random(n) > 0.4
+    for keep in (mask, np.flatnonzero(mask)):
+        picked = cones.select(keep)
+        for name in ("points", "side", "offset", "station", "tangent", "virtual"):
+            assert_array_equal(getattr(picked, name), getattr(cones, name)[keep], err_msg=name)
+            assert getattr(picked, name).dtype == getattr(cones, name).dtype
+    assert cones.join(cones.select(np.zeros(n, dtype=bool))) is cones
+
+
+def test_delaunay_edges_in_scipy_neighbour_order() -> None:
+    """Each vertex's neighbours j > i, in ``vertex_neighbor_vertices`` order."""
+    rng = np.random.default_rng(7)
+    for n in (3, 10, 40):
+        points = rng.uniform(0.0, 30.0, (n, 2))
+        indptr, indices = Delaunay(points).vertex_neighbor_vertices
+        rows = np.repeat(np.arange(n), np.diff(indptr))
+        keep = rows < indices
+        expected = np.column_stack([rows[keep], indices[keep]]).astype(np.intp)
+        got = delaunay_edges(points)
+        assert got.dtype == np.intp
+        assert_array_equal(got, expected)
+
+
+def reference_chain(
+    midpoints: np.ndarray, station: np.ndarray, first: int, axis: StationAxis, config: MidlineConfig
+) -> list[int]:
+    """The ordering walk as first written: full rows as lists, a generator per step."""
+    x, y = midpoints[:, 0], midpoints[:, 1]
+    dist = np.hypot(np.subtract.outer(x, x), np.subtract.outer(y, y))
+    advance = axis.difference(station[None, :], station[:, None])
+    step = np.where(
+        (dist <= config.max_step)
+        & (advance <= config.max_station_step)
+        & (advance >= -config.station_back_tolerance)
+        & (advance >= config.min_step_advance * dist),
+        dist,
+        np.inf,
+    )
+    ranked = np.argsort(step, axis=1, kind="stable").tolist()
+    allowed = np.isfinite(step).sum(axis=1).tolist()
+    candidates = [row[:count] for row, count in zip(ranked, allowed, strict=True)]
+    lengths = step.tolist()
+    visited = [False] * len(midpoints)
+    visited[first] = True
+    order, current = [first], first
+    while True:
+        nxt = next((j for j in candidates[current] if not visited[j]), None)
+        if nxt is None:
+            return order
+        visited[nxt] = True
+        if lengths[current][nxt] < config.min_midpoint_spacing:
+            continue
+        order.append(nxt)
+        current = nxt
+
+
+def test_chain_nearest_is_the_reference_walk() -> None:
+    """Dense, sparse, tied (on a grid) and wrapped midpoints."""
+    rng = np.random.default_rng(8)
+    config = MidlineConfig()
+    for trial in range(200):
+        m = int(rng.integers(1, 60))
+        if trial % 4 == 0:  # on a 0.5 m grid: exact distance ties
+            mid = rng.integers(0, 20, (m, 2)) * 0.5
+        else:
+            mid = np.column_stack([rng.uniform(0.0, 40.0, m), rng.normal(0.0, 1.5, m)])
+        axis = StationAxis(60.0, closed=trial % 2 == 0)
+        station = mid[:, 0] + rng.normal(0.0, 0.3, m)
+        first = int(rng.integers(0, m))
+        got = chain_nearest(mid, station, first, axis, config).tolist()
+        assert got == reference_chain(mid, station, first, axis, config)
+
+
+def reference_menger(points: np.ndarray) -> np.ndarray:
+    """Menger curvature as first written."""
+    n = len(points)
+    if n < 3:
+        return np.zeros(n)
+    a, b, c = points[:-2], points[1:-1], points[2:]
+    ab, bc, ac = b - a, c - b, c - a
+    cross = ab[:, 0] * bc[:, 1] - ab[:, 1] * bc[:, 0]
+    denom = np.hypot(*ab.T) * np.hypot(*bc.T) * np.hypot(*ac.T)
+    inner = np.divide(2.0 * cross, denom, out=np.zeros(n - 2), where=denom > 0.0)
+    return np.concatenate([inner[:1], inner, inner[-1:]])
+
+
+def test_menger_curvature_and_known_arc_length() -> None:
+    """Curvature with shared steps, repeated points included; the profile given its s."""
+    rng = np.random.default_rng(9)
+    for n in (0, 1, 2, 3, 10, 60):
+        points = np.cumsum(rng.normal(0.0, 0.5, (n, 2)), axis=0)
+        if n > 4:
+            points[3] = points[2]  # a zero step: no curvature there
+        assert_array_equal(menger_curvature(points), reference_menger(points))
+        assert_array_equal(speed_profile(points, s=arc_length(points)), speed_profile(points))
+
+
+def test_check_path_with_known_length() -> None:
+    """Passing the path's length changes nothing."""
+    config = MidlineConfig()
+    path = np.column_stack([np.linspace(0.5, 20.0, 40), np.zeros(40)])
+    boundary = np.array([[[5.2, -1.0], [5.2, 1.0]], [[0.0, 1.5], [20.0, 1.5]]])
+    for edges in (boundary, boundary[1:], boundary[:0]):
+        expected = check_path(path, 10, edges, config)
+        assert check_path(path, 10, edges, config, float(arc_length(path)[-1])) == expected
+    assert check_path(path, 10, boundary, config) == "path crosses a track boundary"
