@@ -13,7 +13,9 @@ from __future__ import annotations
 import gymnasium as gym
 
 ENV_ID = "conesim/ConeTrack-v0"
-DEFAULT_MAX_EPISODE_STEPS = 4500  # 90 s at 50 Hz: the default 1-lap time limit
+# A backstop only: the env ends its episodes itself at its ``time_limit`` (with
+# ``info["end_reason"] == "time_limit"``); 100,000 steps is 2,000 s at 50 Hz.
+DEFAULT_MAX_EPISODE_STEPS = 100_000
 
 if ENV_ID not in gym.registry:
     gym.register(

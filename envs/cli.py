@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -29,9 +30,21 @@ from envs.runner import RunResult, run_scenario
 from envs.stack import LOCALIZATION_MODES
 from envs.track_plot import save_track_picture
 from localization.geodesy import GeodesyError
-from localization.global_path import GlobalPathError, atomic_write_text, global_path_for_track
+from localization.global_path import (
+    GlobalPath,
+    GlobalPathError,
+    atomic_write_text,
+    global_path_for_track,
+)
 from sim.sensors import PROFILES as SENSOR_PROFILES
-from tracks import DEFAULT_TRACK, TrackFormatError, check_report, load_track, shipped_tracks
+from tracks import (
+    DEFAULT_TRACK,
+    Track,
+    TrackFormatError,
+    check_report,
+    load_track,
+    shipped_tracks,
+)
 
 EXIT_OK = 0
 EXIT_FAILED = 1
@@ -114,6 +127,7 @@ def cmd_track_show(name: str, out: str) -> int:
 def cmd_track_check(name: str, as_json: bool) -> int:
     """Validate a track; exit 0 when it has no errors."""
     track = load_track(name)
+    global_path_for_track(track)  # a malformed global path CSV is bad input too
     report = check_report(track)
     if as_json:
         print(json.dumps(report))
@@ -130,14 +144,26 @@ def cmd_track_check(name: str, as_json: bool) -> int:
     return EXIT_FAILED if report["errors"] else EXIT_OK
 
 
+MAX_LAPS = 100
+
+
 def cmd_run(args: argparse.Namespace) -> int:
-    """Run one scenario; write result.json and run.png; print the results."""
-    if args.laps < 1:
-        raise CliError(f"--laps {args.laps}: must be at least 1")
-    track = load_track(args.track)  # bad input fails here, before anything is written
+    """Run one scenario; write result.json and run.png; print the results.
+
+    Every input is checked before the run (track, laps, seed, output
+    directory, the render extra), so bad input costs no simulation; the two
+    outputs are written to temporary files and moved into place together.
+    """
+    if not 1 <= args.laps <= MAX_LAPS:
+        raise CliError(f"--laps {args.laps}: must be in [1, {MAX_LAPS}]")
+    if not 0 <= args.seed < 2**63:
+        raise CliError(f"--seed {args.seed}: must be a non-negative integer below 2**63")
+    track = load_track(args.track)
+    global_path = global_path_for_track(track)
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise CliError(f"--out {out}: exists and is not a directory")
+    _check_output_dir(out)
+    if args.render:
+        _check_render_extra()
     bar = ProgressBar(sys.stderr) if sys.stderr.isatty() and not args.json else None
     result = run_scenario(
         args.track,
@@ -151,13 +177,50 @@ def cmd_run(args: argparse.Namespace) -> int:
     if bar:
         bar.close()
     payload = json.dumps(result.to_json(), indent=2)
-    atomic_write_text(out / "result.json", payload + "\n")
-    save_run_picture(result, track, global_path_for_track(track), out / "run.png")
+    _write_outputs(out, payload, result, track, global_path)
     if args.json:
         print(payload)
     else:
         print(format_result(result, out))
     return EXIT_OK if result.finished else EXIT_FAILED
+
+
+def _check_output_dir(out: Path) -> None:
+    """Create ``--out`` and prove it writable, before any simulation."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / f".conesim-write-test-{os.getpid()}"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        raise CliError(f"--out {out}: cannot write there ({exc.strerror or exc})") from None
+
+
+def _check_render_extra() -> None:
+    try:
+        import pygame  # noqa: F401, PLC0415
+    except ImportError:
+        raise CliError(
+            '--render needs pygame: install the render extra, pip install "conesim[render]"'
+        ) from None
+
+
+def _write_outputs(
+    out: Path, payload: str, result: RunResult, track: Track, global_path: GlobalPath
+) -> None:
+    """Write run.png and result.json to temporary names, then move both into place."""
+    tmp_png = out / f".run.png.{os.getpid()}.tmp"
+    tmp_json = out / f".result.json.{os.getpid()}.tmp"
+    try:
+        save_run_picture(result, track, global_path, tmp_png)
+        atomic_write_text(tmp_json, payload + "\n")
+        os.replace(tmp_png, out / "run.png")
+        os.replace(tmp_json, out / "result.json")
+    except OSError as exc:
+        raise CliError(f"--out {out}: cannot write the results ({exc.strerror or exc})") from None
+    finally:
+        tmp_png.unlink(missing_ok=True)
+        tmp_json.unlink(missing_ok=True)
 
 
 def format_result(result: RunResult, out: Path) -> str:

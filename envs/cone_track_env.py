@@ -35,15 +35,17 @@ t = 0, sensors and filter freshly reset with the episode seed.
 Terminated when the requested laps are complete (an open lane such as
 acceleration is one run, whatever ``laps`` says), when the car leaves the
 track (``terminate_off_track``) or is stuck (``terminate_stuck``); truncated
-at the time limit (``time_limit``; default 60 s per lap + 30 s) and by
-gymnasium's ``max_episode_steps``. ``info["end_reason"]`` says which.
+at the time limit (``time_limit``; default 60 s per lap + 30 s).
+``info["end_reason"]`` says which. The registered ``max_episode_steps`` is a
+backstop behind the env's own limit.
 
 ## Arguments
 ``gymnasium.make("conesim/ConeTrack-v0", track="autocross", sensors="rtk",
 localization="fused", laps=1, control_rate=50, observation="vector",
 render_mode="rgb_array", ...)``; every ``envs.config.EnvConfig`` field. Unknown
 keys raise, listing the allowed ones. ``reset(options=...)`` takes ``track``,
-``sensors``, ``localization`` and ``start_pose`` ((x, y, yaw) of the CG).
+``sensors``, ``localization`` and ``start_pose`` ((x, y, yaw) of the CG) for
+that episode only.
 
 ## Version History
 * v0: first release.
@@ -52,7 +54,6 @@ keys raise, listing the allowed ones. ``reset(options=...)`` takes ``track``,
 from __future__ import annotations
 
 import contextlib
-import math
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
@@ -85,11 +86,14 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
                 f"render_mode {render_mode!r}; allowed: {self.metadata['render_modes']}"
             )
         self.render_mode = render_mode
+        # One frame per action: the recorded or shown video runs in real time.
+        self.metadata = {**self.metadata, "render_fps": round(self.config.control_rate)}
         self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
         self.observation_space = observation_space(self.config.max_cones, self.config.observation)
         self._track_cache: dict[str, Track] = {}
-        self._settings = (self.config.track, self.config.sensors, self.config.localization)
-        self.stack = self._build_stack(0, *self._settings)
+        self.stack = self._build_stack(
+            0, self.config.track, self.config.sensors, self.config.localization
+        )
         self.overlay: Any = None  # an object with planner intermediates, for drawing
         self._renderer: Renderer | None = None
         self._action = np.zeros(2, dtype=np.float32)
@@ -101,22 +105,30 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[ObsType, dict[str, Any]]:
-        """Start an episode; ``options`` may pick the track, sensors, localization, start."""
+        """Start an episode; ``options`` may pick the track, sensors, localization, start.
+
+        Options apply to this episode only: a later ``reset`` without them
+        goes back to the env's configuration, so the same seed always gives
+        the same episode.
+        """
         super().reset(seed=seed)
         options = dict(options or {})
         unknown = sorted(set(options) - set(RESET_OPTIONS))
         if unknown:
             raise ValueError(f"reset options {unknown} unknown; allowed: {list(RESET_OPTIONS)}")
-        track = options.get("track", self._settings[0])
-        sensors = options.get("sensors", self._settings[1])
-        localization = options.get("localization", self._settings[2])
+        cfg = self.config
+        track = options.get("track", cfg.track)
+        sensors = options.get("sensors", cfg.sensors)
+        localization = options.get("localization", cfg.localization)
         EnvConfig(track=track, sensors=sensors, localization=localization)  # validates
-        episode_seed = int(self.np_random.integers(0, 2**31 - 1))
         start = options.get("start_pose")
         start_pose = None if start is None else Pose2D(*(float(v) for v in start))
-        if (track, sensors, localization) != self._settings:
-            self._settings = (track, sensors, localization)
-        self.stack = self._build_stack(episode_seed, *self._settings, start_pose)
+        episode_seed = int(self.np_random.integers(0, 2**31 - 1))
+        # Build first: a bad option leaves the env as it was.
+        self.stack = self._build_stack(episode_seed, track, sensors, localization, start_pose)
+        self.overlay = None  # a policy attaches its own after reset
+        if self._renderer is not None:
+            self._renderer.global_path = self.stack.global_path
         self._action = np.zeros(2, dtype=np.float32)
         self._memory = SensorMemory()
         self._memory.update(self.stack.initial_messages)
@@ -279,12 +291,12 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
             },
             "messages": self.last_messages,
         }
-        est = self.stack.estimate()
-        if est is not None:
-            info["localization_error"] = {
-                "position_m": math.hypot(est.pose.x - antenna.x, est.pose.y - antenna.y),
-                "yaw_rad": abs(math.remainder(est.pose.yaw - antenna.yaw, 2 * math.pi)),
-            }
+        samples = self.stack.localization_samples
+        info["localization_error"] = (
+            {"position_m": samples[-1].position_error, "yaw_rad": samples[-1].yaw_error}
+            if samples
+            else None
+        )
         return info
 
     def scene(self) -> Scene:

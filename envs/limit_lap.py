@@ -22,7 +22,9 @@ For the ``VehicleParams`` car (the same limits the simulated car has):
 
 A loop is a flying lap (the passes run twice around so the speed at the line
 is periodic); the simulated car's first lap includes a standing start, so
-compare against its best lap.
+compare against its best lap. An open lane (acceleration) starts from rest
+where the car starts and is timed between its two timing lines, as the
+simulated run is.
 """
 
 from __future__ import annotations
@@ -40,31 +42,31 @@ STEP_M = 0.25  # [m] resampling step of the centreline
 
 
 def centreline_curvature(points: FloatArray, closed: bool) -> tuple[FloatArray, FloatArray]:
-    """Arc-length stations and curvature of a smoothing spline through ``points``.
+    """Arc-length stations and curvature along ``points``.
+
+    An interpolating cubic spline (``splprep`` with s = 0, periodic for a
+    loop) goes through the given points, which lie on the curve; it is
+    evaluated every ``STEP_M`` of arc length with its analytic curvature.
 
     Returns:
-        (s (k,) [m], kappa (k,) [1/m]) every ``STEP_M`` metres.
+        (s (k,) [m], kappa (k,) [1/m]), ``STEP_M`` apart.
     """
     pts = np.asarray(points, dtype=float)
     if closed:
         pts = np.vstack([pts, pts[:1]])
     seg = np.hypot(*np.diff(pts, axis=0).T)
-    keep = np.concatenate([[True], seg > 1e-9])
-    pts = pts[keep]
-    tck, _ = splprep(pts.T, s=len(pts) * 1e-4, per=1 if closed else 0, k=3)
+    pts = pts[np.concatenate([[True], seg > 1e-9])]
+    tck, _ = splprep(pts.T, s=0.0, per=1 if closed else 0, k=3)
     dense = np.linspace(0.0, 1.0, 20 * len(pts))
     x, y = splev(dense, tck)
-    length = float(np.hypot(np.diff(x), np.diff(y)).sum())
-    n = max(8, int(length / STEP_M))
-    u = np.interp(
-        np.linspace(0.0, length, n, endpoint=not closed),
-        np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))]),
-        dense,
-    )
+    s_dense = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
+    length = float(s_dense[-1])
+    n = max(8, round(length / STEP_M))
+    s = np.linspace(0.0, length, n, endpoint=not closed)
+    u = np.interp(s, s_dense, dense)
     dx, dy = splev(u, tck, der=1)
     ddx, ddy = splev(u, tck, der=2)
     kappa = (dx * ddy - dy * ddx) / np.power(dx * dx + dy * dy, 1.5)
-    s = np.linspace(0.0, length, n, endpoint=not closed)
     return s, np.asarray(kappa, dtype=float)
 
 
@@ -111,7 +113,7 @@ def qss_speed_profile(
                 j = i % n
                 k = i - 1
                 vj = out[j]
-                a = min(p.max_decel, a_available(vj, kappa[j]))
+                a = min(p.max_decel, a_available(vj, kappa[k]))  # braking on segment k -> j
                 out[k] = min(out[k], math.sqrt(vj * vj + 2.0 * a * ds[k]))
         return out
 
@@ -133,16 +135,30 @@ def _top_speed(p: VehicleParams) -> float:
 
 
 def limit_lap_time(
-    centreline: FloatArray, closed: bool, params: VehicleParams | None = None
+    centreline: FloatArray,
+    closed: bool,
+    params: VehicleParams | None = None,
+    *,
+    start_s: float = 0.0,
+    timed_from_s: float | None = None,
+    timed_to_s: float | None = None,
 ) -> float:
     """QSS lap time along ``centreline`` for the car ``params`` [s].
 
-    A loop is timed as a flying lap; an open path from a standing start.
+    A loop is timed as a flying lap. An open path starts from rest at station
+    ``start_s`` and is timed from ``timed_from_s`` (default ``start_s``) to
+    ``timed_to_s`` (default its end), as a timed run past two timing lines.
     """
     p = params or VehicleParams()
     s, kappa = centreline_curvature(centreline, closed)
-    v = qss_speed_profile(s, kappa, closed, p)
-    ds = np.full(len(s), s[1] - s[0]) if closed else np.diff(s)
-    v_next = np.roll(v, -1) if closed else v[1:]
-    v_here = v if closed else v[:-1]
-    return float(np.sum(2.0 * ds / np.maximum(v_here + v_next, 1e-6)))
+    if closed:
+        v = qss_speed_profile(s, kappa, closed, p)
+        ds = np.full(len(s), s[1] - s[0])
+        return float(np.sum(2.0 * ds / np.maximum(v + np.roll(v, -1), 1e-6)))
+    keep = s >= start_s - 1e-9
+    s, kappa = s[keep], kappa[keep]
+    v = qss_speed_profile(s, kappa, closed, p, v_start=0.0)
+    t = np.concatenate([[0.0], np.cumsum(2.0 * np.diff(s) / np.maximum(v[:-1] + v[1:], 1e-6))])
+    t0 = float(np.interp(start_s if timed_from_s is None else timed_from_s, s, t))
+    t1 = float(np.interp(s[-1] if timed_to_s is None else timed_to_s, s, t))
+    return t1 - t0

@@ -21,7 +21,7 @@ from scipy.spatial import cKDTree
 from envs.autopilot_policy import AutopilotPolicy
 from envs.cone_track_env import ConeTrackEnv
 from envs.limit_lap import limit_lap_time
-from localization.frames import TransformError
+from sim.progress import PolylineProgress
 from sim.race_control import line_crossings_along
 from tracks import Track
 
@@ -82,20 +82,27 @@ def timed_limit_lap(track: Track) -> float:
 
     A loop: a flying lap of the centreline. The skidpad: one flying circle
     (the centreline between its first two crossings of the timing line). An
-    open lane: from the start of the centreline to the finish line, standing.
+    open lane: from rest at the car's start, timed from the start line to the
+    finish line, as race control times the simulated run.
     """
     centre = np.asarray(track.centreline)
     if track.layout == "closed":
         return limit_lap_time(centre, True)
-    finish = np.asarray(track.finish_line)
     seg = np.hypot(*np.diff(centre, axis=0).T)
     s = np.concatenate([[0.0], np.cumsum(seg)])
-    crossings = line_crossings_along(centre, False, finish)
-    if track.layout == "skidpad" and len(crossings) >= 2:
-        mask = (s >= crossings[0]) & (s < crossings[1])
+    finishes = line_crossings_along(centre, False, np.asarray(track.finish_line))
+    if track.layout == "skidpad" and len(finishes) >= 2:
+        mask = (s >= finishes[0]) & (s < finishes[1])
         return limit_lap_time(centre[mask], True)
-    end = crossings[0] if crossings else s[-1]
-    return limit_lap_time(centre[s <= end], False)
+    starts = line_crossings_along(centre, False, np.asarray(track.start_finish))
+    start_s = PolylineProgress(centre, False).project(track.start_pose.xy).s
+    return limit_lap_time(
+        centre,
+        False,
+        start_s=start_s,
+        timed_from_s=starts[0] if starts else start_s,
+        timed_to_s=finishes[0] if finishes else None,
+    )
 
 
 def run_scenario(
@@ -163,6 +170,7 @@ def _drive(
         if terminated or truncated:
             break
     wall = time.perf_counter() - wall0
+    _localization_trace(env, trace)
     return _result(env, policy, info=info, trace=trace, midline_sq=midline_sq, wall=wall, seed=seed)
 
 
@@ -187,19 +195,14 @@ def _record(env: ConeTrackEnv, policy: AutopilotPolicy, trace: RunTrace) -> None
     trace.y.append(state.y)
     trace.speed.append(state.speed)
     trace.target_speed.append(policy.autopilot.target_speed)
-    # Localization error at broadcast instants: the pose the frame tree holds
-    # for ``t`` against the antenna's true pose at ``t`` (all three modes).
-    stamp = round(t * env.stack.broadcaster.config.rate)
-    if abs(t * env.stack.broadcaster.config.rate - stamp) > 1e-6:
-        return
-    try:
-        est = env.stack.buffer.lookup_pose2d("reference", "gps_antenna", t)
-    except TransformError:
-        return
-    truth = state.antenna_pose()
-    trace.loc_t.append(t)
-    trace.loc_pos_err.append(math.hypot(est.x - truth.x, est.y - truth.y))
-    trace.loc_yaw_err.append(abs(math.remainder(est.yaw - truth.yaw, 2 * math.pi)))
+
+
+def _localization_trace(env: ConeTrackEnv, trace: RunTrace) -> None:
+    """The published pose against truth at every TF broadcast (all three modes)."""
+    for sample in env.stack.localization_samples:
+        trace.loc_t.append(sample.t)
+        trace.loc_pos_err.append(sample.position_error)
+        trace.loc_yaw_err.append(sample.yaw_error)
 
 
 def _rms(values: list[float]) -> float | None:

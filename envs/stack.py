@@ -1,7 +1,6 @@
 """The vehicle stack the env hosts: world, localization and the frame tree.
 
-One control period of the closed loop (``VehicleStack.run_control_period``):
-
+One control period of the closed loop (``VehicleStack.run_physics_steps``),
 for each physics substep (``physics_rate / control_rate`` of them):
 
 1. ``world.step()``: physics, cones, race control, sensors; the measurements
@@ -10,7 +9,10 @@ for each physics substep (``physics_rate / control_rate`` of them):
    ``/ublox_gps_node/fix`` -> ``gps_to_local_cartesian`` -> ``/local_xy``
    (raw mode), ``/global_yaw``, IMU and wheel speed into the EKF (fused mode);
 3. the vehicle TF broadcaster publishes ``reference -> gps_antenna`` into the
-   buffer on its 20 Hz grid (``os_sensor`` is static, sent once).
+   buffer on its 20 Hz grid (``os_sensor`` is static, sent once); at each
+   broadcast the published pose and the antenna's true pose are kept as a
+   ``LocalizationSample``, the localization error as the rest of the car's
+   software sees it.
 
 The stack never decides the actuator command: the env's action (or the
 autopilot policy acting through it) does.
@@ -18,7 +20,8 @@ autopilot policy acting through it) does.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass
 
 from localization.broadcaster import BroadcasterConfig, BroadcastMode, VehicleTfBroadcaster
 from localization.ekf import PROFILES as EKF_PROFILES
@@ -34,17 +37,29 @@ from tracks import Track
 LOCALIZATION_MODES = ("fused", "raw", "truth")
 
 
-@dataclass
-class StepRecord:
-    """What one control period produced.
+@dataclass(frozen=True, slots=True)
+class LocalizationSample:
+    """One broadcast of ``reference -> gps_antenna`` against the truth.
 
     Attributes:
-        messages: every measurement delivered in the period, in delivery order.
-        t: simulation time at its end [s].
+        t: broadcast time [s].
+        published: the pose the frame tree holds for ``t``.
+        truth: the antenna's true pose at ``t``.
     """
 
-    messages: list[Message] = field(default_factory=list)
-    t: float = 0.0
+    t: float
+    published: Pose2D
+    truth: Pose2D
+
+    @property
+    def position_error(self) -> float:
+        """Distance between published and true antenna position [m]."""
+        return math.hypot(self.published.x - self.truth.x, self.published.y - self.truth.y)
+
+    @property
+    def yaw_error(self) -> float:
+        """Absolute heading error, wrapped [rad]."""
+        return abs(math.remainder(self.published.yaw - self.truth.yaw, 2.0 * math.pi))
 
 
 class VehicleStack:
@@ -84,7 +99,7 @@ class VehicleStack:
             The measurements captured at t = 0 (already given to localization).
         """
         self.world = World(self.track, self.world_config, seed=seed, start_pose=self.start_pose)
-        first = self.world.reset(seed, self.start_pose)  # the t = 0 captures
+        first = self.world.initial_messages  # the t = 0 captures
         self.buffer = Buffer()
         profile = self.world_config.sensor_profile.name
         self.ekf = FusionEkf(for_profile(profile if profile in EKF_PROFILES else "rtk"))
@@ -95,8 +110,9 @@ class VehicleStack:
             BroadcasterConfig(mode=mode),
             ekf=self.ekf if mode == BroadcastMode.FUSED else None,
         )
+        self.localization_samples: list[LocalizationSample] = []
         self._handle(first)
-        self.broadcaster.step(0.0, self.world.state.antenna_pose())
+        self._broadcast()
         return first
 
     @property
@@ -110,9 +126,17 @@ class VehicleStack:
         for _ in range(n):
             delivered = self.world.step()
             self._handle(delivered)
-            self.broadcaster.step(self.world.time, self.world.state.antenna_pose())
+            self._broadcast()
             out.extend(delivered)
         return out
+
+    def _broadcast(self) -> None:
+        truth = self.world.state.antenna_pose()
+        sent = self.broadcaster.step(self.world.time, truth)
+        if sent is not None:
+            self.localization_samples.append(
+                LocalizationSample(self.world.time, sent.to_pose2d(), truth)
+            )
 
     def _handle(self, messages: list[Message]) -> None:
         for msg in messages:

@@ -43,10 +43,13 @@ class GeodesyError(ValueError):
 def _check_lat_lon(lat: FloatArray, lon: FloatArray, where: str) -> None:
     if not (np.all(np.isfinite(lat)) and np.all(np.isfinite(lon))):
         raise GeodesyError(f"{where}: latitude/longitude must be finite (got NaN or inf)")
-    if np.any(np.abs(lat) > 90.0):
-        raise GeodesyError(f"{where}: latitude out of range [-90, 90] deg: {lat.max()!r}")
-    if np.any(np.abs(lon) > 180.0):
-        raise GeodesyError(f"{where}: longitude out of range [-180, 180] deg: {lon.max()!r}")
+    for name, values, limit in (("latitude", lat, 90.0), ("longitude", lon, 180.0)):
+        bad = np.abs(values) > limit
+        if np.any(bad):
+            first = float(np.asarray(values)[bad].flat[0])
+            raise GeodesyError(
+                f"{where}: {name} out of range [-{limit:g}, {limit:g}] deg: {first:g}"
+            )
 
 
 @dataclass(frozen=True, slots=True)

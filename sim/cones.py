@@ -12,8 +12,8 @@ asleep against 47.6k awake, pymunk 7.3, 300 cones).
 Scoring as the Formula Student rules do (2 s per cone down or out, DOO):
 
 * a *hit* is a contact between the car and a cone (counted once per cone);
-* a cone is *down or out* once, when its base has left its marked position
-  (displacement beyond ``out_distance``, the base width) or it was struck hard
+* a cone is *down or out* once, when its whole base has left its marked
+  square (moved a full base width along x or y) or it was struck hard
   enough to tip over (its speed after the contact above ``tip_speed``). A 2D
   simulation cannot tip a cone, so the tip-over speed is the model of "down":
   an assumption, documented here and in ``ConeParams``.
@@ -46,8 +46,6 @@ class ConeParams:
         big_base: big cone base width [m] (FSG handbook: 285 x 285 mm).
         big_mass: big cone mass [kg] (assumed: a 505 mm cone).
         mu_ground: cone-asphalt sliding friction coefficient [-] (assumed).
-        out_distance: displacement that puts a cone "out" [m]: one base width,
-            the whole base outside its marked square.
         tip_speed: cone speed after a contact that knocks it "down" [m/s]
             (assumed; a 2D model cannot tip a cone).
         elasticity: restitution of cone contacts [-].
@@ -59,7 +57,6 @@ class ConeParams:
     big_base: float = 0.285  # [m] REFERENCES.md, FSG handbook (check)
     big_mass: float = 1.6  # [kg] assumed
     mu_ground: float = 0.6  # [-] assumed
-    out_distance: float = 0.228  # [m] one small base width
     tip_speed: float = 1.0  # [m/s] assumed
     elasticity: float = 0.2  # [-]
     friction: float = 0.5  # [-]
@@ -199,9 +196,11 @@ class ConeField:
                 self._positions[i] = (pos.x, pos.y)
                 self.version += 1
             if i not in self.doo_ids:
-                moved = math.hypot(*(self._positions[i] - self.initial_positions[i]))
-                speed = body.velocity.length
-                if moved > self.params.out_distance or speed > self.params.tip_speed:
+                # Out: the whole base has left its marked square (axis-aligned
+                # at the cone's start), i.e. moved a full base width along x or y.
+                dx, dy = self._positions[i] - self.initial_positions[i]
+                out = max(abs(dx), abs(dy)) > self.base_widths[i]
+                if out or body.velocity.length > self.params.tip_speed:
                     self.doo_ids.add(i)
                     self.doo_events.append((t, i))
                     new_doo.append(i)

@@ -88,6 +88,10 @@ class World:
         config: world settings.
         seed: episode seed; every random stream derives from it.
         start_pose: CG pose to start from; default the track's start pose.
+
+    Attributes:
+        initial_messages: the measurements captured at t = 0 by the
+            constructor's reset (``reset`` returns them too).
     """
 
     def __init__(
@@ -99,7 +103,7 @@ class World:
     ) -> None:
         self.track = track
         self.config = config or WorldConfig()
-        self.reset(seed, start_pose)
+        self.initial_messages = self.reset(seed, start_pose)
 
     def reset(self, seed: int = 0, start_pose: Pose2D | None = None) -> list[Message]:
         """Rebuild the world at ``t = 0`` for a new episode.

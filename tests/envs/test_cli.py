@@ -160,3 +160,50 @@ def test_run_bad_arguments_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
     """--laps 0 is bad input."""
     code, _, err = run_cli(["run", "--laps", "0"], capsys)
     assert code == 2 and "--laps" in err
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--seed", "-1"], "--seed"),
+        (["--laps", "1000"], "--laps"),
+        (["--out", "FILE/sub"], "--out"),
+    ],
+)
+def test_run_input_errors_before_any_simulation(
+    extra: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Bad seed, laps or output directory: exit 2, one line naming the option, nothing written."""
+    (tmp_path / "FILE").write_text("a file, not a directory")
+    args = [a.replace("FILE", str(tmp_path / "FILE")) for a in extra]
+    code, out, err = run_cli(["run", *args], capsys)
+    assert code == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and message in err
+
+
+def test_run_render_without_pygame(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    """--render without the render extra names the extra and exits 2."""
+    import sys
+
+    monkeypatch.setitem(sys.modules, "pygame", None)
+    code, _, err = run_cli(["run", "--render", "--out", str(tmp_path)], capsys)
+    assert code == 2 and "conesim[render]" in err
+
+
+def test_track_check_reports_a_broken_global_path(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A track whose lat,lon,cov CSV is malformed is bad input for `track check` too."""
+    track_file = tmp_path / "t.yaml"
+    (tmp_path / "t_path.csv").write_text("37.5,abc,0.1\n37.6,127.0,0.1\n")
+    text = (Path(load_track("trackdrive").source or "")).read_text()
+    track_file.write_text(
+        "\n".join(
+            "global_path: t_path.csv" if line.startswith("global_path:") else line
+            for line in text.splitlines()
+        )
+    )
+    code, _, err = run_cli(["track", "check", str(track_file)], capsys)
+    assert code == 2 and "t_path.csv:1" in err and "abc" in err

@@ -144,3 +144,58 @@ def test_human_mode_without_pygame_names_the_extra(monkeypatch: pytest.MonkeyPat
     env = ConeTrackEnv(render_mode="human")
     with pytest.raises(gym.error.DependencyNotInstalled, match=r"conesim\[render\]"):
         env.reset(seed=0)
+
+
+def test_reset_options_last_one_episode_and_bad_ones_change_nothing() -> None:
+    """Options apply to one episode; a bad option leaves the env usable and unchanged."""
+    env = ConeTrackEnv(sensors="ideal")
+    env.reset(seed=3, options={"track": "skidpad"})
+    assert env.stack.track.name == "skidpad"
+    env.reset(seed=3)
+    assert env.stack.track.name == "trackdrive"
+    with pytest.raises(Exception, match="monza"):
+        env.reset(seed=3, options={"track": "monza"})
+    obs, _ = env.reset(seed=3)
+    fresh, _ = ConeTrackEnv(sensors="ideal").reset(seed=3)
+    assert obs.tobytes() == fresh.tobytes()
+
+
+def test_reset_without_seed_continues_the_rng_reproducibly() -> None:
+    """reset(seed=s) then reset() twice gives the same episodes in two envs."""
+    runs = []
+    for _ in range(2):
+        env = ConeTrackEnv()
+        env.reset(seed=11)
+        seeds = []
+        for _ in range(2):
+            env.reset()
+            seeds.append(env.stack.world.seed)
+        runs.append(seeds)
+    assert runs[0] == runs[1] and runs[0][0] != runs[0][1]
+
+
+def test_env_time_limit_comes_before_the_registered_step_cap() -> None:
+    """With 2 laps the episode may run past 90 s: gymnasium's cap is only a backstop."""
+    env = gym.make(envs.ENV_ID, laps=2, sensors="ideal", time_limit=100.0, control_rate=10.0)
+    env.reset(seed=0)
+    steps = 0
+    while True:
+        _, _, terminated, truncated, info = env.step(np.zeros(2, dtype=np.float32))
+        steps += 1
+        if terminated or truncated:
+            break
+    # Standing still: stuck after 5 s ends it (terminated), long before any cap.
+    assert info["end_reason"] == "stuck" and steps == 50
+    env.close()
+
+
+def test_localization_error_in_every_mode() -> None:
+    """info carries the broadcast pose error in raw, fused and truth modes."""
+    for mode in ("raw", "fused", "truth"):
+        env = ConeTrackEnv(localization=mode)
+        env.reset(seed=0)
+        for _ in range(20):
+            _, _, _, _, info = env.step(np.array([0.0, 0.5], dtype=np.float32))
+        err = info["localization_error"]
+        assert err is not None
+        assert err["position_m"] < (1e-9 if mode == "truth" else 0.2)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import os
 from pathlib import Path
 
 import numpy as np
@@ -119,3 +120,13 @@ def test_fuzz_reader_text(tmp_path_factory: pytest.TempPathFactory, lines: list[
     f.write_text(f"{DEFAULT_ORIGIN.lat_deg},{DEFAULT_ORIGIN.lon_deg},0.1\n" + "\n".join(lines))
     with contextlib.suppress(GlobalPathError):
         read_global_path_csv(f)
+
+
+def test_written_file_has_ordinary_permissions(tmp_path: Path) -> None:
+    """The atomic writer leaves a 0644 file under umask 022 (not mkstemp's 0600)."""
+    old = os.umask(0o022)
+    try:
+        write_global_path_csv(tmp_path / "p.csv", global_path_from_centreline(circle(), True))
+    finally:
+        os.umask(old)
+    assert (tmp_path / "p.csv").stat().st_mode & 0o777 == 0o644

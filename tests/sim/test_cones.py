@@ -104,7 +104,7 @@ def test_big_cone_heavier_and_wider() -> None:
     assert_allclose(field.base_widths, [0.285, 0.228])
 
 
-@pytest.mark.parametrize("name", ["small_mass", "mu_ground", "out_distance", "tip_speed"])
+@pytest.mark.parametrize("name", ["small_mass", "mu_ground", "big_base", "tip_speed"])
 def test_bad_params_name_the_field(name: str) -> None:
     """Non-positive parameters are refused with the field named."""
     with pytest.raises(ValueError, match=f"ConeParams.{name}"):
@@ -120,3 +120,14 @@ def test_pushed_cone_falls_asleep_again() -> None:
         space.step(DT)
     assert field.bodies[0].is_sleeping
     assert field.awake_count == 0
+
+
+def test_out_means_the_whole_base_left_its_square() -> None:
+    """Moved 0.2 m diagonally (0.28 m away, still overlapping its 0.228 m square): not out."""
+    space = make_space()
+    field = ConeField(space, np.array([[0.0, 0.0], [5.0, 0.0]]), ("blue", "blue"))
+    field.bodies[0].position = (0.2, 0.2)
+    field.bodies[1].position = (5.0 + 0.25, 0.0)  # a full base width along x: out
+    field._watch.update({0, 1})
+    field.update(0.0)
+    assert field.doo_ids == {1}

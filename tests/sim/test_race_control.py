@@ -126,3 +126,14 @@ def test_bad_rules_rejected() -> None:
     """Out-of-range rules name the field."""
     with pytest.raises(ValueError, match="min_lap_fraction"):
         RaceRules(min_lap_fraction=0.0)
+
+
+def test_off_track_needs_all_four_corners_outside() -> None:
+    """Car 1.4 m wide along the edge: CG 2.5 m out (inner corners 1.8 m) is on; 2.8 m is off."""
+    for offset, expected in ((0.5, False), (0.8, True)):
+        rc = circle_control()
+        prev = pose_on_circle(1.0)
+        rc.start(0.0, prev)
+        pose = pose_on_circle(1.0 + 1e-3, R + 2.0 + offset)  # half width 2 m + offset
+        rc.update(0.0, 0.005, prev, pose)
+        assert rc.state.is_off_track is expected
