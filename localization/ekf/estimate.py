@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from localization.ekf.model import VX, VY, YAW, X
+from localization.ekf.model import VX, VY, YAW, X, wrap_yaw
 from localization.pose import Pose2D, wrap_angle
 
 FloatArray = NDArray[np.float64]
@@ -49,11 +49,12 @@ class Estimate:
         pose_cov = cov[X : YAW + 1, X : YAW + 1].copy()
         for a in (state, cov, pose_cov):
             a.flags.writeable = False
+        values = state.tolist()  # floats: cheaper than numpy scalars
         return cls(
             stamp=stamp,
-            pose=Pose2D(float(state[X]), float(state[X + 1]), float(wrap_angle(state[YAW]))),
-            speed=float(state[VX]),
-            lateral_speed=float(state[VY]),
+            pose=Pose2D(values[X], values[X + 1], wrap_yaw(values[YAW])),
+            speed=values[VX],
+            lateral_speed=values[VY],
             yaw_rate=yaw_rate,
             pose_covariance=pose_cov,
             covariance=cov,

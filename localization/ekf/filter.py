@@ -7,8 +7,9 @@ errors; the IMU is the input). How filterpy is used, given its pitfalls
 
 * ``x`` is (n, 1) and every ``z`` is (m, 1), never 1-D.
 * ``predict`` is linear in filterpy, so :class:`_FilterpyEkf` overrides
-  ``predict_x`` with the nonlinear :func:`~localization.ekf.model.motion_model`
-  and ``F`` and ``Q`` are set from the state before each ``predict``.
+  ``predict_x`` with the nonlinear motion model (x' = f(x, u, dt), computed
+  with ``F`` and ``Q`` by :class:`~localization.ekf.model.MotionStep` and set
+  before each ``predict``).
 * Angles: the heading residual is wrapped (``residual=``), and yaw is wrapped
   after every predict and every update; ``P`` is re-symmetrised after both.
 
@@ -31,6 +32,24 @@ Each message goes through, in order:
 Without GPS (a dropout) nothing special happens: the IMU keeps predicting,
 the heading and wheel speed keep updating, and the position covariance grows
 until the next fix, which the gate measures against that grown covariance.
+
+Written for speed (the closed loop sends ~190 messages a simulated second,
+and every late one replays a few more), with the same numbers as the plain
+formulation (``tests/localization/test_ekf_regression.py``):
+
+* predict: x', F and Q in one pass over floats (:class:`~.model.MotionStep`);
+* update: GPS and heading Jacobians built once; h(x), the residual and the
+  NIS on floats; the gate's residual is the one handed to filterpy;
+* snapshots share the filter's arrays instead of copying them: filterpy
+  replaces ``x`` and ``P`` on every predict and update, this module writes
+  only into the arrays one has just made (the yaw wrap), and a snapshot makes
+  its arrays read-only, so a write through an alias would raise;
+* replay is deferred: the entries after a late message are replayed when
+  something needs the newer state (the next message stamped after them,
+  ``estimate``, ``health``), so a fix and a heading stamped together and
+  delivered together replay once instead of twice;
+* ``estimate(t)`` is cached per stamp and state (the env asks several times
+  per control step).
 """
 
 from __future__ import annotations
@@ -52,6 +71,8 @@ from localization.ekf.measurements import InvalidMessage, Measurement, to_measur
 from localization.messages import Message
 from localization.pose import wrap_angle
 
+ESTIMATE_CACHE_SIZE = 8  # estimates kept (per stamp) for repeated calls
+
 FloatArray = NDArray[np.float64]
 
 _log = logging.getLogger("localization.ekf")
@@ -70,37 +91,56 @@ def heading_residual(a: FloatArray, b: FloatArray) -> FloatArray:
     return np.asarray(wrap_angle(np.subtract(a, b)), dtype=float)
 
 
+def _nis(y: FloatArray, s: FloatArray) -> float:
+    """y' S^-1 y for a 1- or 2-dof innovation, on floats."""
+    if y.shape[0] == 1:
+        y0 = y.item(0)
+        return y0 * (y0 / s.item(0))
+    y0, y1 = y.item(0), y.item(1)
+    a, b, c, d = s.item(0), s.item(1), s.item(2), s.item(3)
+    return (y0 * (d * y0 - b * y1) + y1 * (a * y1 - c * y0)) / (a * d - b * c)
+
+
+def _freeze(a: FloatArray) -> FloatArray:
+    """Make an array read-only (a snapshot shares it) and return it."""
+    a.flags.writeable = False
+    return a
+
+
 class _FilterpyEkf(ExtendedKalmanFilter):
     """filterpy's EKF with the nonlinear motion model as ``predict_x``.
 
+    The motion model's x' is computed together with F and Q
+    (:class:`~localization.ekf.model.MotionStep`) and handed over in
+    ``x_next`` before each ``predict``.
+
     Args:
-        process: the motion model's settings.
+        n: state dimension.
     """
 
-    def __init__(self, process: m.ProcessModel) -> None:
-        super().__init__(dim_x=process.layout.n, dim_z=2)
-        self.x: FloatArray = np.zeros((process.layout.n, 1))
-        self.process = process
-        self.dt = 0.0  # [s] interval of the next predict
+    def __init__(self, n: int) -> None:
+        super().__init__(dim_x=n, dim_z=2)
+        self.x: FloatArray = np.zeros((n, 1))
+        self.x_next: FloatArray = self.x  # f(x, u, dt) for the coming predict
 
     def predict_x(self, u: Any = 0) -> None:
         """x = f(x, u, dt) (filterpy would do F x + B u)."""
-        self.x = m.motion_model(self.x, u, self.dt, self.process)
+        self.x = self.x_next
 
 
-def propagate(snap: Snapshot, t: float, process: m.ProcessModel) -> tuple[FloatArray, FloatArray]:
+def propagate(snap: Snapshot, t: float, step: m.MotionStep) -> tuple[FloatArray, FloatArray]:
     """Predict a held state to ``t`` [s] >= ``snap.t`` without touching the filter.
 
     Returns:
-        (x (n, 1), P (n, n)) at ``t``, yaw wrapped, P symmetric.
+        (x (n, 1), P (n, n)) at ``t``, yaw wrapped, P symmetric; the snapshot's
+        own (read-only) arrays if ``t`` is its time.
     """
     dt = t - snap.t
     if dt <= 0.0:
         return snap.x, snap.P
-    f = m.jacob_f(snap.x, snap.u, dt, process)
-    x1 = m.motion_model(snap.x, snap.u, dt, process)
-    x1[m.YAW, 0] = wrap_angle(x1[m.YAW, 0])
-    p1 = f @ snap.P @ f.T + m.process_noise(snap.x, snap.u, snap.u_cov, dt, process)
+    x1, f, q = step(snap.x, snap.u, snap.u_cov, dt)
+    x1[m.YAW, 0] = m.wrap_yaw(x1.item(m.YAW))
+    p1 = np.dot(f, snap.P).dot(f.T) + q
     return x1, 0.5 * (p1 + p1.T)
 
 
@@ -113,28 +153,40 @@ class FusionEkf:
     Attributes:
         config: the settings.
         layout: the state layout.
-        health: counters of accepted and rejected messages.
     """
 
     def __init__(self, config: EkfConfig | None = None) -> None:
         self.config = config or EkfConfig()
         self.layout = self.config.layout
-        self.health = Health()
+        self._health = Health()
         self._process = self.config.process_model()
+        self._step = m.MotionStep(self._process)
         self._gates = {dof: float(chi2.ppf(self.config.gate_probability, dof)) for dof in (1, 2)}
-        self._ekf = _FilterpyEkf(self._process)
+        self._ekf = _FilterpyEkf(self.layout.n)
+        self._h_position = _freeze(m.jacob_h_position(self._ekf.x, self.layout))  # constant
+        self._h_heading = _freeze(m.jacob_h_heading(self._ekf.x, self.layout))  # constant
+        self._history: History | None = None
+        self._deferred: list[Entry] = []
         self.reset()
 
     # -- public ------------------------------------------------------------------------------
 
     def reset(self) -> None:
         """Forget the state; the filter initialises again from the next fix and heading."""
-        self._history: History | None = None
+        self._replay_deferred()  # its gate decisions still count in ``health``
+        self._history = None
         self._pending: list[Measurement] = []
         self._t = 0.0
         self._u = np.zeros(3)
         self._u_cov = NO_IMU_COV
         self._gps_rejections_in_row = 0
+        self._estimates: dict[float | None, tuple[Snapshot, Estimate]] = {}
+
+    @property
+    def health(self) -> Health:
+        """Counters of accepted and rejected messages (a deferred replay is counted first)."""
+        self._replay_deferred()
+        return self._health
 
     @property
     def initialised(self) -> bool:
@@ -144,7 +196,9 @@ class FusionEkf:
     @property
     def time(self) -> float | None:
         """Stamp of the newest message applied [s], or None before initialisation."""
-        return self._t if self._history is not None else None
+        if self._history is None:
+            return None
+        return self._deferred[-1].measurement.stamp if self._deferred else self._t
 
     def process(self, msg: Message) -> UpdateResult | None:
         """Hand over one message (any order of stamps within the history window).
@@ -160,20 +214,24 @@ class FusionEkf:
         try:
             meas = to_measurement(msg, self.config)
         except InvalidMessage as err:
-            self.health.reject(err.sensor, err.reason, err.stamp, err.detail)
+            self._health.reject(err.sensor, err.reason, err.stamp, err.detail)
             return UpdateResult(err.sensor, err.stamp, False, err.reason)
         if meas is None:
             return None
-        if self._history is None:
+        history = self._history
+        if history is None:
             return self._hold_for_init(meas)
-        result = self._insert(meas, self._history)
+        deferred = self._deferred
+        if deferred and not order_key(meas) < order_key(deferred[0].measurement):
+            self._replay_deferred()  # ``meas`` goes after them: they are needed now
+        result = self._insert(meas, history)
         if self._gps_rejections_in_row >= self.config.max_consecutive_gps_rejections:
             _log.warning(
                 "%d GPS fixes in a row gated at %.6f s: resetting the filter",
                 self._gps_rejections_in_row,
                 meas.stamp,
             )
-            self.health.resets += 1
+            self._health.resets += 1
             self.reset()
         return result
 
@@ -182,20 +240,30 @@ class FusionEkf:
 
         A later stamp is predicted forward with the last IMU input held; an
         earlier one (within the history) starts from the state held then.
+        Repeated calls for the same stamp and state return the same object.
 
         Raises:
             NotInitialisedError: before initialisation.
             ValueError: ``stamp`` is older than the history.
         """
-        if self._history is None:
+        history = self._history
+        if history is None:
             raise NotInitialisedError("the EKF waits for a GPS fix and a heading")
-        snap = self._history.latest
+        self._replay_deferred()
+        snap = history.latest
         if stamp is not None and stamp < snap.t:
-            snap = self._history.snapshot_at(stamp)
+            snap = history.snapshot_at(stamp)
+        cached = self._estimates.get(stamp)
+        if cached is not None and cached[0] is snap:
+            return cached[1]
         t = snap.t if stamp is None else stamp
-        x, p = propagate(snap, t, self._process)
-        yaw_rate = float(snap.u[0] - x[m.GYRO_BIAS, 0])
-        return Estimate.from_state(t, x, p, yaw_rate, self.layout.names)
+        x, p = propagate(snap, t, self._step)
+        yaw_rate = snap.u.item(0) - x.item(m.GYRO_BIAS)
+        est = Estimate.from_state(t, x, p, yaw_rate, self.layout.names)
+        if len(self._estimates) >= ESTIMATE_CACHE_SIZE:
+            self._estimates.clear()
+        self._estimates[stamp] = (snap, est)
+        return est
 
     # -- initialisation ----------------------------------------------------------------------
 
@@ -230,19 +298,19 @@ class FusionEkf:
         imus = [q for q in self._pending if q.sensor == Sensor.IMU and q.stamp <= fix.stamp]
         u, u_cov = (imus[-1].z, imus[-1].cov) if imus else (np.zeros(3), NO_IMU_COV)
         x, p = self._initial_state(fix, heading, wheel)
-        base = Snapshot(fix.stamp, x, p, u, u_cov)
+        base = Snapshot(fix.stamp, _freeze(x), _freeze(p), u, u_cov)
         history = History(base, self.config.history_window)
         self._history = history
         self._restore(base)
         used = [q for q in (fix, heading, wheel) if q is not None]
         for q in used:
-            self.health.accept(q.sensor)
+            self._health.accept(q.sensor)
         later = [q for q in self._pending if q.stamp > fix.stamp and all(q is not k for k in used)]
-        self.health.discarded_before_init += len(self._pending) - len(later) - len(used)
+        self._health.discarded_before_init += len(self._pending) - len(later) - len(used)
         self._pending = []
         skew = heading.stamp - fix.stamp
         _log.info("EKF initialised at %.6f s (heading %+.3f s from the fix)", fix.stamp, skew)
-        for q in later:
+        for q in later:  # in stamp order: each goes last, nothing is replayed
             self._insert(q, history)
 
     def _initial_state(
@@ -295,24 +363,46 @@ class FusionEkf:
     # -- the history -------------------------------------------------------------------------
 
     def _insert(self, meas: Measurement, history: History) -> UpdateResult:
-        """Apply a message at its place in time, replaying what came after it."""
+        """Apply a message at its place in time; what came after it is replayed (or deferred).
+
+        The caller has replayed any deferred entries unless ``meas`` sorts
+        before all of them; those then join the entries after ``meas``.
+        """
         if history.too_old(meas):
             detail = f"older than the history ({history.base.t!r} s)"
-            self.health.reject(meas.sensor, RejectReason.TOO_OLD, meas.stamp, detail)
+            self._health.reject(meas.sensor, RejectReason.TOO_OLD, meas.stamp, detail)
             return UpdateResult(meas.sensor, meas.stamp, False, RejectReason.TOO_OLD)
-        index = history.position(meas)
-        later = history.cut(index)
+        later = history.cut(history.position(meas)) + self._deferred
+        self._deferred = []
         if later:
-            self.health.replays += 1
+            self._health.replays += 1
             self._restore(history.latest)
         result = self._apply(meas, history)
         self._count(result)
+        if not later:
+            history.prune()
+            return result
+        newest = later[-1].measurement.stamp
+        self._deferred = later
+        if later[0].measurement.stamp >= newest - history.window:
+            history.prune(newest)  # drops nothing from ``later``: it may wait
+        else:
+            self._replay_deferred()  # pruning would drop some of ``later``: replay now
+        return result
+
+    def _replay_deferred(self) -> None:
+        """Replay the entries a late message was put before, and prune the history."""
+        later = self._deferred
+        if not later:
+            return
+        self._deferred = []
+        history = self._history
+        assert history is not None  # entries are only deferred while initialised
         for entry in later:
             replayed = self._apply(entry.measurement, history)
             if replayed.accepted != entry.accepted:
-                self.health.revise(entry.measurement.sensor, entry.accepted, replayed.stamp)
+                self._health.revise(entry.measurement.sensor, entry.accepted, replayed.stamp)
         history.prune()
-        return result
 
     def _apply(self, meas: Measurement, history: History) -> UpdateResult:
         """Predict to the message's stamp, use it, and record the state after it.
@@ -336,7 +426,7 @@ class FusionEkf:
     def _count(self, result: UpdateResult) -> None:
         """Count a first decision; track gated fixes in a row."""
         if result.accepted:
-            self.health.accept(result.sensor)
+            self._health.accept(result.sensor)
         if result.sensor == Sensor.GPS:
             self._gps_rejections_in_row = 0 if result.accepted else self._gps_rejections_in_row + 1
 
@@ -348,9 +438,7 @@ class FusionEkf:
         if dt <= 0.0:
             return
         ekf = self._ekf
-        ekf.dt = dt
-        ekf.F = m.jacob_f(ekf.x, self._u, dt, self._process)
-        ekf.Q = m.process_noise(ekf.x, self._u, self._u_cov, dt, self._process)
+        ekf.x_next, ekf.F, ekf.Q = self._step(ekf.x, self._u, self._u_cov, dt)
         ekf.predict(u=self._u)
         self._tidy()
         self._t = t
@@ -358,43 +446,62 @@ class FusionEkf:
     def _update(self, meas: Measurement) -> UpdateResult:
         """Gate one measurement by its NIS and, if it passes, apply it."""
         ekf = self._ekf
-        hx, jac, residual = self._observation(meas.sensor, ekf.x)
-        y = residual(meas.z, hx)
-        s = jac @ ekf.P @ jac.T + meas.cov
-        nis = float((y.T @ np.linalg.solve(s, y))[0, 0])
+        hx, jac, y = self._observe(meas, ekf.x)
+        s = np.dot(jac, ekf.P).dot(jac.T) + meas.cov
+        nis = _nis(y, s)
         dof = y.shape[0]
         if not nis <= self._gates[dof]:
             detail = f"NIS {nis:.3g} > {self._gates[dof]:.3g} ({dof} dof)"
-            self.health.reject(meas.sensor, RejectReason.NIS_GATE, meas.stamp, detail)
+            self._health.reject(meas.sensor, RejectReason.NIS_GATE, meas.stamp, detail)
             return UpdateResult(meas.sensor, meas.stamp, False, RejectReason.NIS_GATE, nis, dof)
-        ekf.update(meas.z, lambda _x: jac, lambda _x: hx, R=meas.cov, residual=residual)
+        ekf.update(meas.z, lambda _x: jac, lambda _x: hx, R=meas.cov, residual=lambda _z, _h: y)
         self._tidy()
         return UpdateResult(meas.sensor, meas.stamp, True, None, nis, dof)
 
-    def _observation(self, sensor: Sensor, x: FloatArray) -> tuple[FloatArray, FloatArray, Any]:
-        """(h(x), H, residual function) of a measurement type."""
+    def _observe(
+        self, meas: Measurement, x: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """(h(x), H, residual z - h(x), wrapped for the heading) of a measurement.
+
+        The same values as :mod:`.model`'s ``h_*`` and ``jacob_h_*`` and
+        :func:`heading_residual`, on floats; the GPS and heading H are constant.
+        """
         layout = self.layout
-        if sensor == Sensor.GPS:
-            return m.h_position(x, layout), m.jacob_h_position(x, layout), np.subtract
-        if sensor == Sensor.HEADING:
-            return m.h_heading(x, layout), m.jacob_h_heading(x, layout), heading_residual
-        return m.h_wheel_speed(x, layout), m.jacob_h_wheel_speed(x, layout), np.subtract
+        if meas.sensor == Sensor.GPS:
+            east, north = x.item(m.X), x.item(m.Y)
+            g = layout.gps_bias_index
+            if g is not None:
+                east, north = east + x.item(g), north + x.item(g + 1)
+            y = np.array([[meas.z.item(0) - east], [meas.z.item(1) - north]])
+            return np.array([[east], [north]]), self._h_position, y
+        if meas.sensor == Sensor.HEADING:
+            yaw = x.item(m.YAW)
+            k = layout.heading_bias_index
+            if k is not None:
+                yaw += x.item(k)
+            y = np.array([[m.wrap_yaw(meas.z.item(0) - yaw)]])
+            return np.array([[yaw]]), self._h_heading, y
+        scale, vx = x.item(m.WHEEL_SCALE), x.item(m.VX)
+        jac = np.zeros((1, layout.n))
+        jac[0, m.VX], jac[0, m.WHEEL_SCALE] = scale, vx
+        speed = scale * vx
+        return np.array([[speed]]), jac, np.array([[meas.z.item(0) - speed]])
 
     def _tidy(self) -> None:
-        """Wrap yaw and re-symmetrise P after a predict or an update."""
+        """Wrap yaw and re-symmetrise P after a predict or an update (both new arrays)."""
         ekf = self._ekf
-        ekf.x[m.YAW, 0] = wrap_angle(ekf.x[m.YAW, 0])
+        ekf.x[m.YAW, 0] = m.wrap_yaw(ekf.x.item(m.YAW))
         ekf.P = 0.5 * (ekf.P + ekf.P.T)
 
     def _snapshot(self) -> Snapshot:
-        """A private copy of the filter's state."""
+        """The filter's state, sharing its arrays (made read-only)."""
         ekf = self._ekf
-        return Snapshot(self._t, ekf.x.copy(), ekf.P.copy(), self._u, self._u_cov)
+        return Snapshot(self._t, _freeze(ekf.x), _freeze(ekf.P), self._u, self._u_cov)
 
     def _restore(self, snap: Snapshot) -> None:
-        """Load a snapshot into the filter (as copies)."""
-        self._ekf.x = snap.x.copy()
-        self._ekf.P = snap.P.copy()
+        """Load a snapshot into the filter (its arrays are replaced, never written, from here)."""
+        self._ekf.x = snap.x
+        self._ekf.P = snap.P
         self._t = snap.t
         self._u = snap.u
         self._u_cov = snap.u_cov

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import bisect
 from dataclasses import dataclass
-from typing import Final
+from typing import Final, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,9 +32,11 @@ RANK: Final = {Sensor.IMU: 0, Sensor.WHEEL_SPEED: 1, Sensor.HEADING: 2, Sensor.G
 """Processing order of messages with equal stamps."""
 
 
-@dataclass(frozen=True, slots=True)
-class Snapshot:
-    """The filter's state at one time (arrays are private copies; never mutate them).
+class Snapshot(NamedTuple):
+    """The filter's state at one time (arrays are shared with the filter and read-only).
+
+    A named tuple: immutable like a frozen dataclass, and cheaper to build
+    (one per message and per replayed message).
 
     Attributes:
         t: time of the state [s].
@@ -102,6 +104,8 @@ class History:
 
     def cut(self, index: int) -> list[Entry]:
         """Remove and return the entries from ``index`` on."""
+        if index >= len(self.entries):
+            return []
         later = self.entries[index:]
         del self.entries[index:]
         del self._keys[index:]
@@ -112,11 +116,20 @@ class History:
         self.entries.append(entry)
         self._keys.append(order_key(entry.measurement))
 
-    def prune(self) -> None:
-        """Drop entries older than the newest stamp minus the window."""
+    def prune(self, newest: float | None = None) -> None:
+        """Drop entries older than the newest stamp minus the window.
+
+        Args:
+            newest: the newest stamp [s], if not the last entry's (entries held
+                back for a replay elsewhere are newer than every entry here).
+        """
         if not self.entries:
             return
-        horizon = self.entries[-1].measurement.stamp - self.window
+        if newest is None:
+            newest = self.entries[-1].measurement.stamp
+        horizon = newest - self.window
+        if self.entries[0].measurement.stamp >= horizon:
+            return
         drop = bisect.bisect_left(self._keys, (horizon, -1))
         if drop:
             self.base = self.entries[drop - 1].after

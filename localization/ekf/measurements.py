@@ -27,10 +27,10 @@ from numpy.typing import NDArray
 
 from localization.ekf.config import EkfConfig
 from localization.ekf.health import RejectReason, Sensor
+from localization.ekf.model import wrap_yaw
 from localization.geodesy import GeodesyError
 from localization.gps_to_local import gps_to_local_cartesian
 from localization.messages import HeadingStamped, Imu, Message, NavSatFix, NavSatStatus, WheelSpeed
-from localization.pose import wrap_angle
 
 FloatArray = NDArray[np.float64]
 
@@ -72,60 +72,70 @@ class Measurement:
     cov: FloatArray
 
 
-def _check(ok: bool, sensor: Sensor, reason: RejectReason, stamp: float, detail: str) -> None:
-    if not ok:
-        raise InvalidMessage(sensor, reason, stamp, detail)
-
-
 def _check_header(sensor: Sensor, stamp: float, frame_id: str, expected: str) -> None:
-    _check(math.isfinite(stamp), sensor, RejectReason.NON_FINITE, stamp, "stamp is not finite")
-    _check(
-        frame_id == expected,
-        sensor,
-        RejectReason.WRONG_FRAME,
-        stamp,
-        f"frame_id {frame_id!r}, expected {expected!r}",
-    )
+    if not math.isfinite(stamp):
+        raise InvalidMessage(sensor, RejectReason.NON_FINITE, stamp, "stamp is not finite")
+    if frame_id != expected:
+        detail = f"frame_id {frame_id!r}, expected {expected!r}"
+        raise InvalidMessage(sensor, RejectReason.WRONG_FRAME, stamp, detail)
 
 
 def _check_variance(sensor: Sensor, stamp: float, variance: float, what: str) -> None:
     """A stated variance: finite (NON_FINITE) and >= 0 (BAD_COVARIANCE)."""
-    _check(math.isfinite(variance), sensor, RejectReason.NON_FINITE, stamp, f"{what} not finite")
-    _check(variance >= 0.0, sensor, RejectReason.BAD_COVARIANCE, stamp, f"{what} {variance!r} < 0")
+    if not math.isfinite(variance):
+        raise InvalidMessage(sensor, RejectReason.NON_FINITE, stamp, f"{what} not finite")
+    if not variance >= 0.0:
+        detail = f"{what} {variance!r} < 0"
+        raise InvalidMessage(sensor, RejectReason.BAD_COVARIANCE, stamp, detail)
+
+
+def _is_diagonal(values: list[float], n: int) -> bool:
+    """Whether the row-major (n, n) ``values`` are zero off the diagonal."""
+    return all(v == 0.0 for k, v in enumerate(values) if k % (n + 1))
 
 
 def _check_covariance(sensor: Sensor, stamp: float, cov: FloatArray, what: str) -> None:
-    """A stated covariance matrix: finite (NON_FINITE), then symmetric and PSD (BAD_COVARIANCE)."""
-    _check(
-        bool(np.all(np.isfinite(cov))),
-        sensor,
-        RejectReason.NON_FINITE,
-        stamp,
-        f"{what} is not finite",
-    )
-    scale = max(1.0, float(np.max(np.abs(cov))))
-    _check(
-        bool(np.all(np.abs(cov - cov.T) <= SYMMETRY_TOLERANCE * scale)),
-        sensor,
-        RejectReason.BAD_COVARIANCE,
-        stamp,
-        f"{what} is not symmetric: {cov.tolist()}",
-    )
+    """A stated covariance matrix: finite (NON_FINITE), then symmetric and PSD (BAD_COVARIANCE).
+
+    On floats; a diagonal matrix (the usual case) is PSD iff its diagonal is >= 0,
+    anything else goes through ``eigvalsh``.
+    """
+    n = cov.shape[0]
+    values = cov.ravel().tolist()
+    if not all(map(math.isfinite, values)):
+        raise InvalidMessage(sensor, RejectReason.NON_FINITE, stamp, f"{what} is not finite")
+    scale = max(1.0, *map(abs, values))
+    tolerance = SYMMETRY_TOLERANCE * scale
+    for i in range(n):
+        for j in range(i + 1, n):
+            if not abs(values[i * n + j] - values[j * n + i]) <= tolerance:
+                detail = f"{what} is not symmetric: {cov.tolist()}"
+                raise InvalidMessage(sensor, RejectReason.BAD_COVARIANCE, stamp, detail)
+    diagonal = values[:: n + 1]
+    if _is_diagonal(values, n) and min(diagonal) >= 0.0:
+        return
     smallest = float(np.min(np.linalg.eigvalsh(cov)))
-    _check(
-        bool(np.all(np.diag(cov) >= 0.0)) and smallest >= -SYMMETRY_TOLERANCE * scale,
-        sensor,
-        RejectReason.BAD_COVARIANCE,
-        stamp,
-        f"{what} is negative or not positive semi-definite (smallest eigenvalue {smallest!r})",
-    )
+    if not (min(diagonal) >= 0.0 and smallest >= -tolerance):
+        detail = (
+            f"{what} is negative or not positive semi-definite (smallest eigenvalue {smallest!r})"
+        )
+        raise InvalidMessage(sensor, RejectReason.BAD_COVARIANCE, stamp, detail)
 
 
 def _floored(cov: FloatArray, floor: float) -> FloatArray:
-    """``cov`` raised so that its smallest eigenvalue is at least ``floor``^2."""
-    smallest = float(np.min(np.linalg.eigvalsh(cov)))
+    """``cov`` raised so that its smallest eigenvalue is at least ``floor``^2.
+
+    A diagonal matrix's eigenvalues are its diagonal (``eigvalsh`` returns
+    exactly those), so it skips ``eigvalsh``.
+    """
+    n = cov.shape[0]
+    values = cov.ravel().tolist()
+    if _is_diagonal(values, n):
+        smallest = min(values[:: n + 1])
+    else:
+        smallest = float(np.min(np.linalg.eigvalsh(cov)))
     if smallest < floor * floor:
-        cov = cov + (floor * floor - smallest) * np.eye(cov.shape[0])
+        cov = cov + (floor * floor - smallest) * np.eye(n)
     return cov
 
 
@@ -138,12 +148,15 @@ def from_imu(msg: Imu, cfg: EkfConfig) -> Measurement:
     """The filter's input u = (w_m, a_x, a_y) and its per-sample covariance."""
     stamp = msg.header.stamp
     _check_header(Sensor.IMU, stamp, msg.header.frame_id, cfg.antenna_frame)
-    ok = all(math.isfinite(v) for v in (msg.yaw_rate, msg.accel_x, msg.accel_y))
-    _check(ok, Sensor.IMU, RejectReason.NON_FINITE, stamp, "value not finite")
+    w, ax, ay = msg.yaw_rate, msg.accel_x, msg.accel_y
+    if not (math.isfinite(w) and math.isfinite(ax) and math.isfinite(ay)):
+        raise InvalidMessage(Sensor.IMU, RejectReason.NON_FINITE, stamp, "value not finite")
     _check_variance(Sensor.IMU, stamp, msg.yaw_rate_variance, "yaw_rate_variance")
     _check_variance(Sensor.IMU, stamp, msg.accel_variance, "accel_variance")
-    u = np.array([msg.yaw_rate, msg.accel_x, msg.accel_y], dtype=float)
-    cov = np.diag([msg.yaw_rate_variance, msg.accel_variance, msg.accel_variance])
+    u = np.array((w, ax, ay), dtype=float)
+    cov = np.zeros((3, 3))
+    cov[0, 0] = msg.yaw_rate_variance
+    cov[1, 1] = cov[2, 2] = msg.accel_variance
     return Measurement(Sensor.IMU, stamp, _frozen(u), _frozen(cov))
 
 
@@ -151,7 +164,8 @@ def from_fix(msg: NavSatFix, cfg: EkfConfig) -> Measurement:
     """The antenna position in ``reference`` (the seed's ``/local_xy``), (2, 1) [m]."""
     stamp = msg.header.stamp
     _check_header(Sensor.GPS, stamp, msg.header.frame_id, cfg.antenna_frame)
-    _check(msg.status != NavSatStatus.NO_FIX, Sensor.GPS, RejectReason.NO_FIX, stamp, "no fix")
+    if msg.status == NavSatStatus.NO_FIX:
+        raise InvalidMessage(Sensor.GPS, RejectReason.NO_FIX, stamp, "no fix")
     full = np.asarray(msg.position_covariance, dtype=float)
     _check_covariance(Sensor.GPS, stamp, full, "position_covariance")
     try:
@@ -174,7 +188,8 @@ def _scalar(
     bias_sigma: float = 0.0,
 ) -> Measurement:
     """A checked scalar measurement; its variance less ``bias_sigma``^2, floored."""
-    _check(math.isfinite(value), sensor, RejectReason.NON_FINITE, stamp, "value not finite")
+    if not math.isfinite(value):
+        raise InvalidMessage(sensor, RejectReason.NON_FINITE, stamp, "value not finite")
     _check_variance(sensor, stamp, variance, "variance")
     z = np.array([[value]], dtype=float)
     cov = np.array([[max(variance - bias_sigma * bias_sigma, floor * floor)]])
@@ -189,7 +204,7 @@ def from_heading(msg: HeadingStamped, cfg: EkfConfig) -> Measurement:
     """
     stamp = msg.header.stamp
     _check_header(Sensor.HEADING, stamp, msg.header.frame_id, cfg.reference_frame)
-    yaw = float(wrap_angle(msg.yaw)) if math.isfinite(msg.yaw) else msg.yaw
+    yaw = wrap_yaw(msg.yaw) if math.isfinite(msg.yaw) else msg.yaw
     return _scalar(
         Sensor.HEADING,
         stamp,
