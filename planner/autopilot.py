@@ -26,6 +26,7 @@ waypoints with speeds, status), ``path_now`` and ``lookahead_point`` (current
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable
 
@@ -36,11 +37,13 @@ from localization.global_path import GlobalPath
 from localization.messages import ConeDetections, Message, WheelSpeed
 from planner.classify import ClassifiedCones, classify_cones_by_side
 from planner.config import AutopilotConfig
-from planner.geometry import FloatArray, PathProjector
+from planner.geometry import FloatArray, PathProjector, arc_length
+from planner.global_speed import GlobalSpeedPlan
 from planner.messages import ControlCommand
 from planner.midline import LocalPlan, PlanStatus, reference_path_planning
 from planner.pure_pursuit import SteeringResult, pure_pursuit
 from planner.speed_control import SpeedController, target_on_path
+from planner.speed_profile import speed_profile
 
 _TIME_EPS = 1e-9  # [s] tolerance of the control schedule
 
@@ -60,6 +63,11 @@ class Autopilot:
         self.buffer = buffer
         self.config = config or AutopilotConfig()
         self.projector = PathProjector(global_path)
+        self.global_speed = (
+            GlobalSpeedPlan(global_path, self.config.speed_profile)
+            if self.config.global_speed
+            else None
+        )
         self.speed_controller = SpeedController(self.config.speed_control)
         self.classified: ClassifiedCones | None = None
         self.plan: LocalPlan | None = None
@@ -138,6 +146,8 @@ class Autopilot:
                 previous=self.plan,
                 sensor_frame=c.sensor_frame,
             )
+            if self.global_speed is not None and len(plan.path) > 1:
+                plan = self._with_global_speed(plan, classified.sensor_station)
             path_reference = self.buffer.transform_points(
                 c.reference_frame, c.sensor_frame, plan.path, plan.header.stamp
             )
@@ -152,6 +162,14 @@ class Autopilot:
         self.fallback_count += plan.status is PlanStatus.FALLBACK
         self.failed_count += plan.status is PlanStatus.FAILED
         return plan
+
+    def _with_global_speed(self, plan: LocalPlan, sensor_station: float) -> LocalPlan:
+        """The plan's speeds ending at the global path's speed where the path ends."""
+        assert self.global_speed is not None
+        s = arc_length(plan.path)
+        v_end = self.global_speed.speed_at(sensor_station + float(s[-1]))
+        speeds = speed_profile(plan.path, self.config.speed_profile, self.speed(), s=s, v_end=v_end)
+        return dataclasses.replace(plan, speeds=speeds)
 
     def speed(self) -> float:
         """Speed estimate [m/s]: the last wheel speed, else from the frame tree, else 0."""

@@ -320,6 +320,9 @@ class AutopilotConfig(Settings):
         pure_pursuit: steering.
         speed_control: longitudinal control.
         control_rate: control (steering, acceleration) rate [Hz] (design card: 50 Hz).
+        global_speed: let the local speed profile end at the global path's
+            speed at its last station (``planner.global_speed``) instead of
+            standing still at the end of the seen path.
         speed_window: span of the frame-tree speed estimate used when no wheel
             speed has arrived [s].
         reference_frame: the world frame (a vehicle prefix is allowed).
@@ -332,6 +335,7 @@ class AutopilotConfig(Settings):
     pure_pursuit: PurePursuitConfig = field(default_factory=PurePursuitConfig)
     speed_control: SpeedControlConfig = field(default_factory=SpeedControlConfig)
     control_rate: float = 50.0  # [Hz]
+    global_speed: bool = True
     speed_window: float = 0.1  # [s]
     reference_frame: str = FRAME_REFERENCE
     sensor_frame: str = FRAME_OS_SENSOR

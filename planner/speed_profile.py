@@ -79,6 +79,7 @@ def speed_profile(
     v_start: float | None = None,
     *,
     s: FloatArray | None = None,
+    v_end: float | None = None,
 ) -> FloatArray:
     """Target speed (n,) [m/s] at each waypoint of an (n, 2) path [m].
 
@@ -87,6 +88,8 @@ def speed_profile(
         config: the limits.
         v_start: speed at the first waypoint [m/s]; None leaves it free.
         s: ``arc_length(points)`` [m] if known.
+        v_end: with ``horizon_stop``, the speed allowed at the last waypoint
+            [m/s] instead of 0 (the global path says what lies beyond it).
     """
     config = config or _DEFAULT_CONFIG
     n = len(points)
@@ -102,5 +105,5 @@ def speed_profile(
         v[0] = min(v[0], max(v_start, 0.0))
     v = forward_pass(s, v, config.a_drive)
     if config.horizon_stop:
-        v[-1] = 0.0
+        v[-1] = 0.0 if v_end is None else min(v[-1], max(v_end, 0.0))
     return backward_pass(s, v, config.a_brake)

@@ -1,0 +1,42 @@
+"""Tests for planner.global_speed and the speed profile's end speed."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.testing import assert_allclose
+
+from localization.global_path import global_path_from_centreline
+from planner.config import SpeedProfileConfig
+from planner.global_speed import GlobalSpeedPlan
+from planner.speed_profile import speed_profile
+
+
+def test_circle_speed_is_sqrt_a_lat_r_everywhere() -> None:
+    """A closed circle of R = 10 m: sqrt(a_lat R) = sqrt(60) = 7.75 m/s at every station."""
+    t = np.linspace(0.0, 2 * math.pi, 200, endpoint=False)
+    path = global_path_from_centreline(np.column_stack([10 * np.cos(t), 10 * np.sin(t)]), True)
+    plan = GlobalSpeedPlan(path, SpeedProfileConfig())
+    for station in (0.0, 17.0, 40.0, plan.length + 3.0):
+        assert_allclose(plan.speed_at(station), math.sqrt(6.0 * 10.0), rtol=1e-3)
+
+
+def test_open_path_brakes_to_its_end() -> None:
+    """A 200 m straight: v_max far from the end, sqrt(2 a_b d) within d of it."""
+    x = np.linspace(0.0, 200.0, 401)
+    path = global_path_from_centreline(np.column_stack([x, np.zeros_like(x)]), False)
+    cfg = SpeedProfileConfig()
+    plan = GlobalSpeedPlan(path, cfg)
+    assert_allclose(plan.speed_at(100.0), cfg.v_max, rtol=1e-6)
+    assert_allclose(plan.speed_at(195.0), math.sqrt(2 * cfg.a_brake * 5.0), rtol=1e-3)
+    assert plan.speed_at(200.0) == 0.0
+
+
+def test_local_profile_ends_at_the_given_speed() -> None:
+    """With horizon_stop and v_end = 8 m/s, a 20 m straight ends at 8, not 0."""
+    pts = np.column_stack([np.arange(0.0, 20.01, 0.5), np.zeros(41)])
+    v = speed_profile(pts, SpeedProfileConfig(), v_start=10.0, v_end=8.0)
+    assert_allclose(v[-1], 8.0)
+    stop = speed_profile(pts, SpeedProfileConfig(), v_start=10.0)
+    assert stop[-1] == 0.0 and np.all(stop <= v + 1e-12)
