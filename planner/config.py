@@ -234,6 +234,11 @@ class SpeedProfileConfig(Settings):
         v_max: speed cap [m/s].
         horizon_stop: plan to stand still at the end of the known path, so the
             car can always stop within what it has seen.
+        curvature_window: the curvature limit uses the curvature averaged over
+            this arc length [m] (0: point by point). A spline through noisy
+            midpoints wiggles on the scale of a metre, which the car, steering
+            at a lookahead of several metres, never drives; read point by
+            point those wiggles would cap the speed.
     """
 
     a_lat_max: float = 6.0  # [m/s^2] ~0.6 g, margin below mu = 1.0 (fssim)
@@ -241,10 +246,12 @@ class SpeedProfileConfig(Settings):
     a_brake: float = 6.0  # [m/s^2] planning margin below EUFS -10
     v_max: float = 15.0  # [m/s]
     horizon_stop: bool = True
+    curvature_window: float = 2.0  # [m] tuned on the shipped tracks (lap tests, 3 seeds)
 
     def __post_init__(self) -> None:
         for name in ("a_lat_max", "a_drive", "a_brake", "v_max"):
             _check("SpeedProfileConfig", name, getattr(self, name), 1e-9)
+        _check("SpeedProfileConfig", "curvature_window", self.curvature_window, 0.0)
 
 
 @dataclass(frozen=True)

@@ -52,6 +52,19 @@ def _menger(points: FloatArray, step: FloatArray, step_length: FloatArray) -> Fl
     return kappa
 
 
+def window_mean(values: FloatArray, spacing: float, window: float) -> FloatArray:
+    """Centred moving average over ``window`` [m] of samples ``spacing`` [m] apart
+    (the ends average what the window holds)."""
+    half = int(window / (2.0 * spacing)) if spacing > 0.0 else 0
+    if half < 1:
+        return values
+    c = np.concatenate([[0.0], np.cumsum(values)])
+    n = len(values)
+    lo = np.clip(np.arange(n) - half, 0, n)
+    hi = np.clip(np.arange(n) + half + 1, 0, n)
+    return (c[hi] - c[lo]) / (hi - lo)
+
+
 def curvature_limit(kappa: FloatArray, config: SpeedProfileConfig) -> FloatArray:
     """Step 2: min(v_max, sqrt(a_lat_max / |kappa|)) [m/s], shape of ``kappa``."""
     k = np.abs(kappa)
@@ -100,7 +113,10 @@ def speed_profile(
     if s is None:
         s = np.zeros(n)
         np.cumsum(step_length, out=s[1:])  # arc_length(points)
-    v = curvature_limit(_menger(points, step, step_length), config)
+    kappa = _menger(points, step, step_length)
+    if config.curvature_window > 0.0 and n > 2:
+        kappa = window_mean(kappa, float(s[-1]) / (n - 1), config.curvature_window)
+    v = curvature_limit(kappa, config)
     if v_start is not None:
         v[0] = min(v[0], max(v_start, 0.0))
     v = forward_pass(s, v, config.a_drive)

@@ -40,6 +40,7 @@ def regression_config() -> EkfConfig:
     retuning the profile's defaults does not disturb this implementation check)."""
     return for_profile("rtk", accel_model_density=0.02, yaw_model_density=0.001)
 
+
 DURATION = 4.0  # [s] of recorded world
 SEED = 11
 CHECKPOINTS = (1.0, 2.0, 3.0)  # [s] world times at which the pose is pinned too

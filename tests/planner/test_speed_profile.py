@@ -11,7 +11,7 @@ from numpy.testing import assert_allclose
 from planner import SpeedProfileConfig, speed_profile
 from planner.speed_profile import backward_pass, forward_pass, menger_curvature
 
-FREE = SpeedProfileConfig(v_max=100.0, horizon_stop=False)
+FREE = SpeedProfileConfig(v_max=100.0, horizon_stop=False, curvature_window=0.0)
 
 
 def arc(radius: float, length: float, step: float = 0.5, left: bool = True) -> np.ndarray:
@@ -89,3 +89,22 @@ def test_empty_and_single_point() -> None:
     """Degenerate paths give empty or single speeds."""
     assert speed_profile(np.zeros((0, 2))).shape == (0,)
     assert speed_profile(np.zeros((1, 2)), FREE).tolist() == [100.0]
+
+
+def test_curvature_window_averages_wiggles_but_keeps_a_circle() -> None:
+    """A window keeps sqrt(a R) on a circle; on a zig-zag it averages 7 samples.
+
+    Alternating curvature +-k over 7 samples averages to k / 7, so the
+    curvature limit rises from sqrt(6 / k) to sqrt(6 * 7 / k).
+    """
+    cfg = SpeedProfileConfig(horizon_stop=False, curvature_window=3.0)
+    v = speed_profile(arc(10.0, 60.0), cfg)
+    assert_allclose(v[4:-4], math.sqrt(6.0 * 10.0), rtol=1e-6)
+    x = np.arange(0.0, 30.0, 0.5)
+    zigzag = np.column_stack([x, 0.02 * (-1.0) ** np.arange(len(x))])
+    free = {"a_drive": 1000.0, "a_brake": 1000.0, "horizon_stop": False}
+    point_by_point = speed_profile(zigzag, SpeedProfileConfig(curvature_window=0.0, **free))
+    windowed = speed_profile(zigzag, SpeedProfileConfig(curvature_window=3.2, **free))
+    k = abs(menger_curvature(zigzag)[10])
+    assert_allclose(point_by_point[2:-2], math.sqrt(6.0 / k), rtol=1e-9)
+    assert_allclose(windowed[8:-8], math.sqrt(6.0 * 7 / k), rtol=1e-9)
