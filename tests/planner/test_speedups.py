@@ -58,6 +58,22 @@ def test_project_around_is_the_two_step_projection(
             assert_array_equal(getattr(got, name), getattr(expected, name), err_msg=name)
 
 
+@pytest.mark.parametrize("closed", [True, False])
+def test_window_shortcut_is_the_segment_mask(closed: bool) -> None:
+    """A window is applied exactly when it overlaps a segment, near the ends and beyond too."""
+    projector = loop_path(closed)
+    length = projector.length
+    rng = np.random.default_rng(10)
+    centres = np.concatenate(
+        [rng.uniform(-30.0, length + 30.0, 300), [0.0, length, -1e-9, length + 1e-9]]
+    )
+    for centre in centres:
+        for back, ahead in ((20.0, 35.0), (0.0, 0.0), (0.05, 0.05), (0.0, 1e-3), (3.0, 0.0)):
+            window = (centre - back, centre + ahead)
+            expected = bool(projector.window_mask(*window).any())
+            assert (projector._preference(window, 2.0) is not None) == expected, window
+
+
 def test_polyline_crosses_is_any_segment_crossing() -> None:
     """The straddle prefilter finds exactly the crossings of the full pairwise test."""
     rng = np.random.default_rng(2)
