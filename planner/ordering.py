@@ -18,9 +18,8 @@ one stretch of track, using each midpoint's station along the global path
 
 The chain stops when no midpoint qualifies.
 
-Written for speed: the step matrix is built with a few numpy calls, its
-allowed steps are ranked with one ``lexsort`` (not a sort of every row), and
-the walk itself is plain Python over each row's allowed steps, nearest first.
+Written for speed: the step matrix is built with a few numpy calls and the
+walk itself is plain Python over each row's allowed steps, nearest first.
 """
 
 from __future__ import annotations
@@ -62,41 +61,40 @@ def chain_nearest(
     config: MidlineConfig,
 ) -> IntArray:
     """Indices of the chain of nearest neighbours from ``first`` (see module docstring)."""
-    m = len(midpoints)
     x, y = midpoints[:, 0], midpoints[:, 1]
     dist = np.hypot(np.subtract.outer(x, x), np.subtract.outer(y, y))
     advance = axis.difference(station[None, :], station[:, None])
-    allowed = dist <= config.max_step
-    allowed &= advance <= config.max_station_step
-    allowed &= advance >= -config.station_back_tolerance
-    allowed &= advance >= config.min_step_advance * dist
-    # The allowed steps (row-major: by row, then column), sorted by row and
-    # within a row by length (ties: lower column first, ``lexsort`` is
-    # stable), as flat Python lists; row i's steps are [start[i], end[i]).
-    # The walk itself is plain Python, cheaper than a numpy call per step
-    # for the few dozen midpoints in view.
-    flat = np.flatnonzero(allowed)
-    rows = flat // m
-    lengths = dist.ravel().take(flat)
-    ranked = np.lexsort((lengths, rows))
-    targets = (flat - rows * m).take(ranked).tolist()
-    step_length = lengths.take(ranked).tolist()
-    end = np.bincount(rows, minlength=m).cumsum().tolist()
-    start = [0, *end[:-1]]
-    visited = [False] * m
+    step = np.where(
+        (dist <= config.max_step)
+        & (advance <= config.max_station_step)
+        & (advance >= -config.station_back_tolerance)
+        & (advance >= config.min_step_advance * dist),
+        dist,
+        np.inf,
+    )
+    # Each row's allowed steps, nearest first, as Python lists (only as many
+    # columns as the longest row allows); the walk itself is plain Python,
+    # cheaper than a numpy call per step for the few dozen midpoints in view.
+    allowed = np.isfinite(step).sum(axis=1)
+    ranked = step.argsort(axis=1, kind="stable")[:, : int(allowed.max())]
+    lengths = step[np.arange(len(step))[:, None], ranked].tolist()
+    candidates = ranked.tolist()
+    counts = allowed.tolist()
+    visited = [False] * len(midpoints)
     visited[first] = True
     order = [first]
     current = first
     while True:
-        for k in range(start[current], end[current]):  # the nearest unvisited allowed step
-            if not visited[targets[k]]:
+        row = candidates[current]
+        for k in range(counts[current]):  # the nearest unvisited allowed step
+            if not visited[row[k]]:
                 break
         else:
             break
-        visited[targets[k]] = True
-        if step_length[k] < config.min_midpoint_spacing:
+        visited[row[k]] = True
+        if lengths[current][k] < config.min_midpoint_spacing:
             continue
-        current = targets[k]
+        current = row[k]
         order.append(current)
     return np.asarray(order, dtype=np.intp)
 
