@@ -212,9 +212,16 @@ class PathProjector:
         self, window: tuple[float, float] | None, penalty: float
     ) -> tuple[float, float, float] | None:
         """The window as (centre, half width, penalty) [m], or None when it does not apply."""
-        if window is None or not penalty > 0.0 or not self.window_mask(*window).any():
+        if window is None or not penalty > 0.0:
             return None
-        return (0.5 * (window[0] + window[1]), 0.5 * (window[1] - window[0]), penalty)
+        lo, hi = window
+        # The segments tile [0, length] (the whole ring when closed): a window
+        # reaching well into that range overlaps one of them, so the mask
+        # over every segment is only needed near or beyond the ends.
+        inside = self.closed or (lo < self.length - self._half_max and hi > self._half_max)
+        if not (inside and hi - lo > self._half_max) and not self.window_mask(lo, hi).any():
+            return None
+        return (0.5 * (lo + hi), 0.5 * (hi - lo), penalty)
 
     def _last_station(self, p: FloatArray, found: _Candidates) -> float:
         """Station [m] of the last point's nearest segment on the whole path (no window)."""
@@ -390,18 +397,22 @@ def polyline_crosses(points: FloatArray, b0: FloatArray, b1: FloatArray) -> bool
 
     ``np.any(segments_cross(points[:-1], points[1:], b0, b1))``, computed in two
     steps for speed: first the side of every polyline point of every
-    segment's line (one (k, p) matrix), which leaves the few polyline
-    segments that straddle a line; only those are tested against the line
-    through the other segment.
+    segment's line (one (p, k) matrix, built in place, consecutive points in
+    consecutive rows), which leaves the few polyline segments that straddle a
+    line (found with one flat ``nonzero``); only those are tested against the
+    line through the other segment.
     """
     if len(points) < 2 or len(b0) == 0:
         return False
     db = b1 - b0
     cb = db[:, 0] * b0[:, 1] - db[:, 1] * b0[:, 0]
-    side = _orientation(db, cb, points)  # (k, p)
-    k, j = np.nonzero(side[:, :-1] * side[:, 1:] < 0.0)
-    if len(k) == 0:
+    side = np.multiply.outer(points[:, 1], db[:, 0])  # (p, k): _orientation transposed
+    side -= np.multiply.outer(points[:, 0], db[:, 1])
+    side -= cb
+    hits = np.flatnonzero(side[:-1] * side[1:] < 0.0)
+    if len(hits) == 0:
         return False
+    j, k = np.divmod(hits, len(cb))
     a0, a1 = points.take(j, axis=0), points.take(j + 1, axis=0)
     da = a1 - a0
     ca = da[:, 0] * a0[:, 1] - da[:, 1] * a0[:, 0]

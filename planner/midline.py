@@ -149,8 +149,12 @@ def cones_to_sensor(
 ) -> tuple[ConeSet, float]:
     """Step 1: the classified cones in ``sensor_frame``; also the stamp used [s]."""
     transform = buffer.lookup_transform(sensor_frame, cones.header.frame_id, time)
-    points = transform.transform_points(cones.points)
-    tangent = transform.transform_points(cones.points + cones.tangent) - points
+    n = len(cones.points)
+    # The cones and their tangents' tips in one call (row by row, the same numbers).
+    tips = cones.points + cones.tangent
+    mapped = transform.transform_points(np.concatenate([cones.points, tips]))
+    points = mapped[:n]
+    tangent = mapped[n:] - points
     cone_set = ConeSet(
         points=points,
         side=cones.side,

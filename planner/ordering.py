@@ -20,6 +20,9 @@ The chain stops when no midpoint qualifies.
 
 Written for speed: the step matrix is built with a few numpy calls and the
 walk itself is plain Python over each row's allowed steps, nearest first.
+Ranking only the allowed steps (one ``lexsort`` of the flat nonzeros) was
+measured faster on its own but slower inside the full planning step, where
+every extra numpy routine runs cold: the row ``argsort`` stays.
 """
 
 from __future__ import annotations

@@ -8,8 +8,10 @@ arc length of that polyline gives the parameter of each output point
 (``numpy.interp``), and the spline is evaluated there. The points lie on the
 spline; their spacing is off by the polyline's chord error, relative
 ``(h kappa)^2 / 24``, 1e-3 at h = 0.25 m and R = 3 m. With fewer than
-``min_spline_points`` midpoints, or when ``splprep`` fails or warns, the
-midpoints are joined by straight lines instead (the seed's fallback).
+``min_spline_points`` midpoints, or when ``splprep`` fails or warns (FITPACK's
+``ier > 0``, read from ``full_output`` rather than by turning warnings into
+errors), the midpoints are joined by straight lines instead (the seed's
+fallback).
 
 Written for speed: the fitted spline is evaluated as one
 ``scipy.interpolate.BSpline`` (``construct_fast``, both coordinates per call)
@@ -19,8 +21,6 @@ B-spline basis as FITPACK's ``fpbspl`` does; checked bitwise by a test).
 """
 
 from __future__ import annotations
-
-import warnings
 
 import numpy as np
 from scipy.interpolate import BSpline, splprep
@@ -38,18 +38,22 @@ def spline_through(points: FloatArray, config: MidlineConfig) -> FloatArray | No
     length = float(arc_length(points)[-1])
     count = max(int(length * _SAMPLES_PER_STEP / config.spacing) + 2, 2 * m)
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error")
-            (knots, coefficients, k), _ = splprep(points.T, s=m * config.spline_sigma**2, k=degree)
-            spline = BSpline.construct_fast(knots, np.column_stack(coefficients), k)
-            u = np.arange(count) * (1.0 / (count - 1))  # np.linspace(0, 1, count), cheaper
-            u[-1] = 1.0
-            s = arc_length(spline(u))
-            stations = np.arange(0.0, float(s[-1]), config.spacing)
-            if s[-1] - stations[-1] > 1e-9:
-                stations = np.concatenate([stations, s[-1:]])
-            path: FloatArray = spline(np.interp(stations, s, u))
-    except (ValueError, TypeError, RuntimeWarning):
+        # full_output: FITPACK's flag instead of a warning (ier 1-3) or an
+        # exception (ier > 3); ier <= 0 is a sound fit.
+        ((knots, coefficients, k), _), _, ier, _ = splprep(
+            points.T, s=m * config.spline_sigma**2, k=degree, full_output=True
+        )
+        if ier > 0:
+            return None
+        spline = BSpline.construct_fast(knots, np.column_stack(coefficients), k)
+        u = np.arange(count) * (1.0 / (count - 1))  # np.linspace(0, 1, count), cheaper
+        u[-1] = 1.0
+        s = arc_length(spline(u))
+        stations = np.arange(0.0, float(s[-1]), config.spacing)
+        if s[-1] - stations[-1] > 1e-9:
+            stations = np.concatenate([stations, s[-1:]])
+        path: FloatArray = spline(np.interp(stations, s, u))
+    except (ValueError, TypeError):
         return None
     return path if np.isfinite(path).all() else None
 

@@ -13,6 +13,7 @@ from types import ModuleType
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
+from scipy.interpolate import splev, splprep
 
 from localization.frames import Buffer
 from localization.messages import ConeDetections, Header
@@ -28,6 +29,7 @@ from planner import (
     classify_cones_by_side,
     reference_path_planning,
 )
+from planner.geometry import resample_polyline
 from planner.spline import fit_path
 
 
@@ -279,6 +281,39 @@ def test_few_midpoints_are_joined_by_straight_lines() -> None:
     assert_allclose(path[4], [2.0, 0.0])
     assert_allclose(path[-1], [2.0, 1.5])
     assert np.all((path[:5, 1] == 0.0) & (path[4:, 0] == 2.0)[: len(path[4:])].all())
+
+
+def test_spline_path_lies_on_the_fitted_spline() -> None:
+    """Four or more midpoints: points on splprep's interpolating spline, 0.5 m apart."""
+    x = np.linspace(0.0, 12.0, 7)
+    mids = np.column_stack([x, 2.0 * np.sin(x / 4.0)])
+    path = fit_path(mids, MidlineConfig())
+    tck, _ = splprep(mids.T, s=0.0, k=3)
+    u = np.linspace(0.0, 1.0, 20001)
+    dense = np.column_stack(splev(u, tck))
+    gap = np.hypot(*(path[:, None, :] - dense[None]).transpose(2, 0, 1)).min(axis=1)
+    assert gap.max() < 4e-4  # on the spline: within half the dense samples' 7e-4 m spacing
+    assert_allclose(path[0], mids[0], atol=1e-12)
+    assert_allclose(path[-1], mids[-1], atol=1e-12)
+    step = np.hypot(*np.diff(path, axis=0).T)
+    assert_allclose(step[:-1], 0.5, rtol=2e-3)  # chord error of the 0.25 m sampling
+    assert not np.allclose(path[4:6, 1], np.interp(path[4:6, 0], x, mids[:, 1]), atol=1e-3)
+
+
+def test_fitpack_flag_falls_back_to_straight_lines(monkeypatch: pytest.MonkeyPatch) -> None:
+    """splprep reporting ier > 0 (a FITPACK warning) gives the polyline, as the seed."""
+    import planner.spline
+
+    real = planner.spline.splprep
+
+    def flagged(*args, **kwargs):  # type: ignore[no-untyped-def]
+        tcku, fp, _, message = real(*args, **kwargs)
+        return tcku, fp, 1, message
+
+    monkeypatch.setattr(planner.spline, "splprep", flagged)
+    x = np.linspace(0.0, 12.0, 7)
+    mids = np.column_stack([x, 2.0 * np.sin(x / 4.0)])
+    assert_allclose(fit_path(mids, MidlineConfig()), resample_polyline(mids, 0.5))
 
 
 def test_outputs_match_the_seed_topics(synth: ModuleType, circle) -> None:

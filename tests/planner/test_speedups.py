@@ -15,9 +15,13 @@ from numpy.testing import assert_array_equal
 from scipy.interpolate import BSpline, splev, splprep
 from scipy.spatial import Delaunay
 
+from localization.frames import Buffer, TransformStamped
 from localization.global_path import global_path_from_centreline
+from localization.messages import Header
+from localization.pose import Pose2D
 from planner import MidlineConfig
 from planner.bridges import ConeSet, delaunay_edges, median
+from planner.classify import ClassifiedCones
 from planner.geometry import (
     PathProjector,
     StationAxis,
@@ -25,7 +29,7 @@ from planner.geometry import (
     polyline_crosses,
     segments_cross,
 )
-from planner.midline import check_path
+from planner.midline import check_path, cones_to_sensor
 from planner.ordering import chain_nearest
 from planner.speed_profile import menger_curvature, speed_profile
 
@@ -56,6 +60,52 @@ def test_project_around_is_the_two_step_projection(
         got = projector.project_around(points, 20.0, 35.0, penalty, hint)
         for name in ("foot", "segment", "station", "offset", "tangent", "distance"):
             assert_array_equal(getattr(got, name), getattr(expected, name), err_msg=name)
+
+
+@pytest.mark.parametrize("closed", [True, False])
+def test_window_shortcut_is_the_segment_mask(closed: bool) -> None:
+    """A window is applied exactly when it overlaps a segment, near the ends and beyond too."""
+    projector = loop_path(closed)
+    length = projector.length
+    rng = np.random.default_rng(10)
+    centres = np.concatenate(
+        [rng.uniform(-30.0, length + 30.0, 300), [0.0, length, -1e-9, length + 1e-9]]
+    )
+    for centre in centres:
+        for back, ahead in ((20.0, 35.0), (0.0, 0.0), (0.05, 0.05), (0.0, 1e-3), (3.0, 0.0)):
+            window = (centre - back, centre + ahead)
+            expected = bool(projector.window_mask(*window).any())
+            assert (projector._preference(window, 2.0) is not None) == expected, window
+
+
+def test_cones_to_sensor_maps_points_and_tangents_in_one_call() -> None:
+    """Cones and tangent tips stacked into one transform: the numbers of two calls."""
+    buffer = Buffer()
+    buffer.set_transform(
+        TransformStamped.from_pose2d("reference", "os_sensor", 1.0, Pose2D(3.0, -2.0, 0.7))
+    )
+    rng = np.random.default_rng(11)
+    axis = StationAxis(100.0, False)
+    for n in (0, 1, 2, 7, 33, 120):
+        tangent = rng.normal(size=(n, 2))
+        tangent /= np.hypot(tangent[:, 0], tangent[:, 1])[:, None]
+        cones = ClassifiedCones(
+            header=Header(1.0, "reference"),
+            points=rng.uniform(-40.0, 40.0, (n, 2)),
+            side=np.where(rng.random(n) > 0.5, 1, -1).astype(np.int8),
+            offset=rng.normal(size=n),
+            station=rng.uniform(0.0, 100.0, n),
+            tangent=tangent,
+            index=np.arange(n),
+            by_colour=np.zeros(n, dtype=bool),
+            sensor_station=10.0,
+            axis=axis,
+        )
+        got, _ = cones_to_sensor(cones, buffer, 1.0, "os_sensor")
+        transform = buffer.lookup_transform("os_sensor", "reference", 1.0)
+        points = transform.transform_points(cones.points)
+        assert_array_equal(got.points, points)
+        assert_array_equal(got.tangent, transform.transform_points(cones.points + tangent) - points)
 
 
 def test_polyline_crosses_is_any_segment_crossing() -> None:
