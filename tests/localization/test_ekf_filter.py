@@ -282,7 +282,7 @@ def test_modelled_bias_is_taken_out_of_the_stated_variance() -> None:
 def test_profiles_and_their_state_sizes() -> None:
     """Each sensor profile has settings; the correlated ones carry their bias states."""
     sizes = {name: FusionEkf(for_profile(name)).layout.n for name in ("ideal", "rtk", "consumer")}
-    assert sizes == {"ideal": 7, "rtk": 9, "consumer": 10}
+    assert sizes == {"ideal": 7, "rtk": 7, "consumer": 10}
     assert for_profile("rtk", gate_probability=0.99).gate_probability == 0.99
 
 

@@ -84,8 +84,11 @@ def test_unknown_profile_lists_the_names() -> None:
 
 
 def test_profile_figures() -> None:
-    """rtk: 2.5 cm GPS at 10 Hz; M8: CEP 2.5 m -> 2.1233 m per axis in both consumer variants."""
+    """rtk: 2.5 cm white GPS per axis at 10 Hz;
+    M8: CEP 2.5 m -> 2.1233 m per axis in both consumer variants; heading 1 + 2 deg
+    -> hypot = 2.236 deg white in consumer_white."""
     rtk = get_profile("rtk")
+    assert rtk.gps.bias_sigma == 0.0
     assert_allclose(rtk.gps.total_sigma, 0.025)
     assert (rtk.gps.rate, rtk.heading.rate, rtk.imu.rate) == (10.0, 20.0, 100.0)
     assert (rtk.wheel_speed.rate, rtk.cones.rate) == (50.0, 10.0)
@@ -93,6 +96,10 @@ def test_profile_figures() -> None:
     consumer, white = get_profile("consumer").gps, get_profile("consumer_white").gps
     assert_allclose([consumer.total_sigma, white.total_sigma], 2.5 / 1.1774, rtol=1e-12)
     assert white.bias_sigma == 0.0 and consumer.bias_sigma > 0.9 * consumer.white_sigma
+    heading, white_heading = get_profile("consumer").heading, get_profile("consumer_white").heading
+    assert white_heading.bias_sigma == 0.0
+    assert_allclose(white_heading.white_sigma, math.radians(2.2360680), rtol=1e-7)
+    assert_allclose(math.hypot(heading.white_sigma, heading.bias_sigma), white_heading.white_sigma)
     assert (consumer.rate, consumer.latency) == (5.0, 0.12)
     ideal = get_profile("ideal")
     assert ideal.cones.false_positive_rate == 0.0 and not ideal.cones.occlusion
