@@ -7,6 +7,9 @@ localization), the global path, and the messages it receives.
   ``classify_cones_by_side`` at the detection's stamp (if the frame tree has
   no transform there yet, at the latest one, counted in ``tf_latest_count``)
   and ``reference_path_planning`` with the latest transform, as in the seed.
+  With ``speed_source = "global"`` the waypoints' speeds are then the
+  global path's speed plan at their stations (``planner.global_speed``),
+  limited to what the car reaches accelerating from its speed.
   The plan's path is also kept in ``reference``, and the sensor's station
   along the global path is kept as the next classification's
   ``station_hint``.
@@ -15,7 +18,9 @@ localization), the global path, and the messages it receives.
 - Control runs at ``control_rate`` (50 Hz): the path is brought from
   ``reference`` into the current ``os_sensor`` frame, pure pursuit steers
   toward its lookahead point, and the PI controller tracks the waypoint
-  speeds. Without a path the car brakes to a stop with the wheels straight.
+  speeds, within the friction ellipse left by the lateral acceleration the
+  steering asks for (v^2 tan(delta) / L). Without a path the car brakes to
+  a stop with the wheels straight.
 
 Every intermediate is an attribute for drawing and recording: ``classified``
 (left/right cones in ``reference``), ``plan`` (bridge lines, midpoints, path,
@@ -43,7 +48,7 @@ from planner.messages import ControlCommand
 from planner.midline import LocalPlan, PlanStatus, reference_path_planning
 from planner.pure_pursuit import SteeringResult, pure_pursuit
 from planner.speed_control import SpeedController, target_on_path
-from planner.speed_profile import speed_profile
+from planner.speed_profile import forward_pass, speed_profile
 
 _TIME_EPS = 1e-9  # [s] tolerance of the control schedule
 
@@ -167,6 +172,14 @@ class Autopilot:
         """The plan's speeds ending at the global path's speed where the path ends."""
         assert self.global_speed is not None
         s = arc_length(plan.path)
+        if self.config.speed_source == "global":
+            # The waypoints' stations: the sensor's, plus the path's first
+            # point's distance ahead (x in ``os_sensor``), plus arc length.
+            stations = sensor_station + float(plan.path[0, 0]) + s
+            v = self.global_speed.speeds_at(stations)
+            v[0] = min(v[0], max(self.speed(), 0.0))
+            v = forward_pass(s, v, self.config.speed_profile.a_drive)
+            return dataclasses.replace(plan, speeds=v)
         v_end = self.global_speed.speed_at(sensor_station + float(s[-1]))
         speeds = speed_profile(plan.path, self.config.speed_profile, self.speed(), s=s, v_end=v_end)
         return dataclasses.replace(plan, speeds=speeds)
@@ -206,7 +219,8 @@ class Autopilot:
         axle = np.array([c.pure_pursuit.rear_axle_x, 0.0])
         v_ref, a_ff = target_on_path(path, self.plan.speeds, axle, speed, c.speed_control)
         self.target_speed = v_ref
-        acceleration = self.speed_controller.step(v_ref, speed, dt, a_ff)
+        a_lat = speed * speed * math.tan(self.steering.steering) / c.pure_pursuit.wheelbase
+        acceleration = self.speed_controller.step(v_ref, speed, dt, a_ff, a_lat)
         self.command = ControlCommand(t, self.steering.steering, acceleration)
         return self.command
 

@@ -6,7 +6,9 @@ also carries the global path, so it knows what lies beyond the cones in view:
 this module runs the same speed profile (curvature limit, drive and brake
 passes, ``planner.speed_profile``) once along the whole global path, and the
 autopilot lets the local plan end at the global plan's speed at that station
-instead of at 0. Steering still follows only the cones in view.
+instead of at 0, or (``AutopilotConfig.speed_source = "global"``) takes
+the global plan's speed at every waypoint. Steering still follows only the
+cones in view.
 
 A closed path is profiled over three laps and the middle one kept, so the
 speed at the start/finish line is that of a flying lap; an open path stops at
@@ -56,3 +58,10 @@ class GlobalSpeedPlan:
         if self.closed:
             station %= self.length
         return float(np.interp(station, self.stations, self.speeds))
+
+    def speeds_at(self, stations: FloatArray) -> FloatArray:
+        """Allowed speeds (n,) [m/s] at arc lengths ``stations`` (n,) [m]."""
+        st = np.asarray(stations, dtype=float)
+        if self.closed:
+            st = np.mod(st, self.length)
+        return np.interp(st, self.stations, self.speeds)

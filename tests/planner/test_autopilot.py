@@ -14,6 +14,7 @@ from types import ModuleType
 
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
 
 from localization.frames import Buffer
 from localization.messages import ConeDetections, Header, Message, WheelSpeed
@@ -87,8 +88,10 @@ def test_closed_loop_on_a_circle(synth: ModuleType, circle) -> None:
     radius = np.array([math.hypot(p.x, p.y) for _, p, _ in trace])
     speeds = np.array([v for _, _, v in trace])
     assert np.max(np.abs(radius - 15.0)) < 0.3
-    # a_lat_max = 6 m/s^2 on R = 15 m: sqrt(6 * 15) = 9.5 m/s at most.
-    assert 7.0 < speeds[-1] < math.sqrt(6.0 * 15.0) + 0.3
+    # a_lat_max = 14 m/s^2 on R = 15 m: sqrt(14 * 15) = 14.5 m/s at most,
+    # reached from rest at 3 m/s^2 in under 5 s.
+    assert AutopilotConfig().speed_profile.a_lat_max == 14.0
+    assert 13.5 < speeds[-1] < math.sqrt(14.0 * 15.0) + 0.3
     assert len(commands) == 600  # 50 Hz for 12 s
     assert autopilot.plan_count == 119  # 10 Hz, the first delivered at 0.1 s
     assert autopilot.fallback_count == autopilot.failed_count == autopilot.skipped_count == 0
@@ -101,6 +104,10 @@ def test_closed_loop_on_a_circle(synth: ModuleType, circle) -> None:
     assert plan.waypoints().speeds.shape == (len(plan.path),)
     assert autopilot.lookahead_point is not None and autopilot.path_now.shape[1] == 2
     assert autopilot.target_speed > 0.0
+    # speed_source "global": the waypoints' speeds are the global plan's,
+    # sqrt(14 * 15) = 14.49 m/s all round the circle, once the car is at it.
+    assert autopilot.global_speed is not None
+    assert_allclose(plan.speeds[5:], math.sqrt(14.0 * 15.0), rtol=2e-3)
 
 
 def test_closed_loop_is_deterministic(synth: ModuleType, hairpin) -> None:
@@ -111,10 +118,19 @@ def test_closed_loop_is_deterministic(synth: ModuleType, hairpin) -> None:
 
 
 def test_closed_loop_through_a_hairpin(synth: ModuleType, hairpin) -> None:
-    """Around the R = 3.5 m hairpin: within 0.5 m of the middle (measured 0.36 m, cut inside)."""
-    autopilot, _, trace = drive(synth, hairpin, 9.0)
+    """Around the R = 3.5 m hairpin: within a lookahead chord's sagitta of the middle.
+
+    At sqrt(14 * 3.5) = 7 m/s the lookahead is 2 + 0.35 * 7 = 4.45 m, whose
+    chord in R = 3.5 m lies R - sqrt(R^2 - (4.45 / 2)^2) = 0.80 m inside: the
+    most pure pursuit cuts (measured 0.73 m). A 1.4 m wide car in a 3 m lane
+    clears the cones up to 0.8 m off the middle.
+    """
+    autopilot, _, trace = drive(synth, hairpin, 7.5)  # 9 s runs past the last cones
     antenna = np.array([[p.x, p.y] for _, p, _ in trace])
-    assert np.max(hairpin.distance_to_centre(antenna)) < 0.5
+    lookahead = 2.0 + 0.35 * math.sqrt(14.0 * 3.5)
+    sagitta = 3.5 - math.sqrt(3.5**2 - (lookahead / 2) ** 2)
+    assert sagitta == pytest.approx(0.80, abs=0.01)
+    assert np.max(hairpin.distance_to_centre(antenna)) < sagitta
     assert antenna[-1, 1] > 6.5 and antenna[-1, 0] < -5.0  # on the exit leg (y = 7 m)
     assert autopilot.fallback_count == 0
 

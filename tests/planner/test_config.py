@@ -9,6 +9,7 @@ from planner import (
     ClassifierConfig,
     MidlineConfig,
     PurePursuitConfig,
+    SpeedControlConfig,
     SpeedProfileConfig,
 )
 
@@ -54,6 +55,10 @@ def test_unknown_nested_key_raises() -> None:
         (ClassifierConfig, {"mode": "magic"}),
         (ClassifierConfig, {"left_colours": ("blue",), "right_colours": ("blue",)}),
         (AutopilotConfig, {"control_rate": 0.0}),
+        (AutopilotConfig, {"speed_source": "map"}),
+        (SpeedControlConfig, {"integral_band": -1.0}),
+        (SpeedControlConfig, {"lateral_grip": 0.0}),
+        (SpeedControlConfig, {"ellipse_floor": 1.5}),
     ],
 )
 def test_out_of_range_values_raise(cls: type, values: dict[str, object]) -> None:

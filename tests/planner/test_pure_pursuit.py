@@ -39,9 +39,9 @@ def test_circle_gives_the_geometric_angle(radius: float, left: bool, speed: floa
 
 
 def test_lookahead_grows_with_speed_within_limits() -> None:
-    """L_d = 2 + 0.25 v, clipped to [2, 10] m."""
+    """L_d = 2 + 0.35 v, clipped to [2, 10] m."""
     assert lookahead_distance(0.0, CONFIG) == 2.0
-    assert lookahead_distance(10.0, CONFIG) == pytest.approx(4.5)
+    assert lookahead_distance(10.0, CONFIG) == pytest.approx(5.5)
     assert lookahead_distance(50.0, CONFIG) == 10.0
 
 
@@ -58,7 +58,7 @@ def test_straight_path_ahead_steers_straight() -> None:
     x = np.arange(0.0, 20.0, 0.5)
     result = pure_pursuit(np.column_stack([x, np.zeros_like(x)]), 5.0, CONFIG)
     assert result.steering == 0.0
-    assert_allclose(result.target, [CONFIG.rear_axle_x + 3.25, 0.0], atol=1e-12)
+    assert_allclose(result.target, [CONFIG.rear_axle_x + 3.75, 0.0], atol=1e-12)
 
 
 def test_target_when_the_path_is_short_or_starts_far() -> None:
