@@ -46,7 +46,7 @@ from planner.geometry import FloatArray, PathProjector, arc_length
 from planner.global_speed import GlobalSpeedPlan
 from planner.messages import ControlCommand
 from planner.midline import LocalPlan, PlanStatus, reference_path_planning
-from planner.pure_pursuit import SteeringResult, pure_pursuit
+from planner.pure_pursuit import SteeringResult, lookahead_distance, pure_pursuit
 from planner.speed_control import SpeedController, target_on_path
 from planner.speed_profile import forward_pass, speed_profile
 
@@ -79,6 +79,7 @@ class Autopilot:
         self.path_reference: FloatArray = np.zeros((0, 2))
         self.path_now: FloatArray = np.zeros((0, 2))
         self.steering: SteeringResult | None = None
+        self.path_curvature: FloatArray = np.zeros(0)  # [1/m] global, at the waypoints
         self.target_speed = 0.0  # [m/s]
         self.command: ControlCommand | None = None
         self.wheel_speed: float | None = None  # [m/s]
@@ -176,6 +177,7 @@ class Autopilot:
             # The waypoints' stations: the sensor's, plus the path's first
             # point's distance ahead (x in ``os_sensor``), plus arc length.
             stations = sensor_station + float(plan.path[0, 0]) + s
+            self.path_curvature = self.global_speed.curvature_at(stations)
             v = self.global_speed.speeds_at(stations)
             v[0] = min(v[0], max(self.speed(), 0.0))
             v = forward_pass(s, v, self.config.speed_profile.a_drive)
@@ -215,7 +217,7 @@ class Autopilot:
             acceleration = self.speed_controller.step(0.0, speed, dt)
             self.command = ControlCommand(t, 0.0, acceleration)
             return self.command
-        self.steering = pure_pursuit(path, speed, c.pure_pursuit)
+        self.steering = pure_pursuit(path, speed, c.pure_pursuit, self._lookahead_cap(path, speed))
         axle = np.array([c.pure_pursuit.rear_axle_x, 0.0])
         v_ref, a_ff = target_on_path(path, self.plan.speeds, axle, speed, c.speed_control)
         self.target_speed = v_ref
@@ -223,6 +225,26 @@ class Autopilot:
         acceleration = self.speed_controller.step(v_ref, speed, dt, a_ff, a_lat)
         self.command = ControlCommand(t, self.steering.steering, acceleration)
         return self.command
+
+    def _lookahead_cap(self, path: FloatArray, speed: float) -> float | None:
+        """``lookahead_radius_ratio`` times the tightest radius within the lookahead [m].
+
+        The radius is the global path's at the waypoints (``path_curvature``,
+        with ``speed_source = "global"``) from the one nearest the rear axle
+        to one lookahead distance on. A lookahead longer than the radius aims
+        across the inside of a hairpin: the chord of L_d in a circle of R
+        lies R - sqrt(R^2 - L_d^2 / 4) inside it, 0.96 m for 4.9 m in 3.5 m
+        but 0.47 m for L_d = R.
+        """
+        pp = self.config.pure_pursuit
+        if len(self.path_curvature) != len(path) or len(path) < 2:
+            return None
+        axle = np.array([pp.rear_axle_x, 0.0])
+        s = arc_length(path)
+        nearest = int(np.argmin(np.hypot(path[:, 0] - axle[0], path[:, 1] - axle[1])))
+        ahead = (s >= s[nearest]) & (s <= s[nearest] + lookahead_distance(speed, pp))
+        kappa = float(np.max(np.abs(self.path_curvature[ahead])))
+        return pp.lookahead_radius_ratio / kappa if kappa > 0.0 else None
 
     def _path_in_sensor_frame(self) -> FloatArray:
         """The plan's path in the latest ``os_sensor`` frame (the planned one if that fails)."""

@@ -230,7 +230,9 @@ class SpeedProfileConfig(Settings):
     """Limits of the speed profile along the local path.
 
     Attributes:
-        a_lat_max: lateral acceleration limit [m/s^2]; v = sqrt(a_lat_max / |kappa|).
+        a_lat_max: lateral acceleration limit at rest [m/s^2]; v = sqrt(a_lat_max / |kappa|).
+        a_lat_aero: growth of the lateral limit with speed squared, from
+            downforce [1/m]: a_lat(v) = a_lat_max + a_lat_aero v^2.
         a_drive: longitudinal acceleration limit of the forward pass [m/s^2].
         a_brake: deceleration limit of the backward pass [m/s^2], > 0.
         v_max: speed cap [m/s].
@@ -241,21 +243,36 @@ class SpeedProfileConfig(Settings):
             midpoints wiggles on the scale of a metre, which the car, steering
             at a lookahead of several metres, never drives; read point by
             point those wiggles would cap the speed.
+        lateral_jerk_max: the car changes its lateral acceleration at most
+            this fast [m/s^3]: v <= (J / |dkappa/ds|)^(1/3)
+            (``planner.speed_profile``); inf: no limit.
+        jerk_window: the curvature's slope is taken over this arc length [m].
+        friction_ellipse: the drive and brake passes use only the grip the
+            corner leaves, ``a * sqrt(1 - (a_lat / a_lat(v))^2)``
+            (``planner.speed_profile``).
     """
 
     # The tyre (fssim D = 1.6, mu = 1) grips 1.6 g = 15.7 m/s^2 before downforce;
     # 14 leaves about 10 % for tracking corrections (lap tests, seeds 0-4).
     a_lat_max: float = 14.0  # [m/s^2]
+    # fssim C_Down 1.903 N s^2/m^2 on 190 kg, times the tyre's 1.6: 0.016 1/m
+    # (11 m/s^2 more at 26 m/s); planned at the same 14 / 15.7 share as a_lat_max.
+    a_lat_aero: float = 0.0143  # [1/m]
     a_drive: float = 3.0  # [m/s^2] EUFS +3
     a_brake: float = 8.0  # [m/s^2] margin below EUFS -10 for the 0.2 s detection latency
     v_max: float = 25.0  # [m/s] below the car's ~29.7 m/s top speed
     horizon_stop: bool = True
     curvature_window: float = 2.0  # [m] tuned on the shipped tracks (lap tests, 3 seeds)
+    lateral_jerk_max: float = 60.0  # [m/s^3] skidpad crossing ~10 m/s, lap tests seeds 0-5
+    jerk_window: float = 4.0  # [m]
     friction_ellipse: bool = True
 
     def __post_init__(self) -> None:
         for name in ("a_lat_max", "a_drive", "a_brake", "v_max"):
             _check("SpeedProfileConfig", name, getattr(self, name), 1e-9)
+        _check("SpeedProfileConfig", "a_lat_aero", self.a_lat_aero, 0.0)
+        _check("SpeedProfileConfig", "lateral_jerk_max", self.lateral_jerk_max, 1e-9)
+        _check("SpeedProfileConfig", "jerk_window", self.jerk_window, 0.0)
         _check("SpeedProfileConfig", "curvature_window", self.curvature_window, 0.0)
 
 
@@ -271,17 +288,30 @@ class PurePursuitConfig(Settings):
         lookahead_gain: growth of the lookahead with speed [s]:
             L_d = clip(lookahead_min + lookahead_gain * v, lookahead_min, lookahead_max).
         lookahead_max: longest lookahead distance [m].
+        lookahead_radius_ratio: the lookahead is at most this times the
+            tightest radius of the global path within it [-] (the autopilot,
+            ``speed_source = "global"``); inf: no cap.
+        slip_stiffness: slope of the tyres' friction used per radian of
+            slip [1/rad], for the rear axle's slip angle
+            (``planner.pure_pursuit.rear_slip_angle``); inf: no slip.
+        downforce_per_mass: downforce per mass per speed squared [1/m]; the
+            normal load per mass is g plus this times v^2.
     """
 
     wheelbase: float = 1.53  # [m] fssim car.yaml
     rear_axle_x: float = -0.465  # [m] sim default: 0.765 - 0.3 behind the antenna
     max_steer: float = 0.47  # [rad] EUFS QEV3
     lookahead_min: float = 2.0  # [m]
-    # 0.35 s: L_d 5.5 m at 10 m/s, 8 m at 17 m/s. 0.25 s let the car weave
-    # (+-0.9 m, growing) through the autocross slalom at 12 m/s; 0.45 s cut
-    # the trackdrive's corners into cones.
-    lookahead_gain: float = 0.35  # [s]
+    # 0.4 s: L_d 6 m at 10 m/s, 10 m at 20 m/s. 0.25 s let the car weave
+    # (+-0.9 m, growing) through the autocross slalom at 12 m/s; 0.35 s spun
+    # the car in 1 of 9 trackdrive runs (seeds 0-8) at 18 m/s.
+    lookahead_gain: float = 0.4  # [s]
     lookahead_max: float = 10.0  # [m]
+    # L_d <= R: the chord of L_d = R lies 0.47 m inside R = 3.5 m (0.96 m for
+    # the 4.9 m the law gives at 7 m/s).
+    lookahead_radius_ratio: float = 1.0  # [-]
+    slip_stiffness: float = 27.7  # [1/rad] fssim tyre B*C*D = 12.56 * 1.38 * 1.60
+    downforce_per_mass: float = 0.01  # [1/m] fssim C_Down 1.903 N s^2/m^2 / 190 kg
 
     def __post_init__(self) -> None:
         owner = "PurePursuitConfig"
@@ -290,6 +320,9 @@ class PurePursuitConfig(Settings):
         _check(owner, "lookahead_min", self.lookahead_min, 1e-9)
         _check(owner, "lookahead_gain", self.lookahead_gain, 0.0)
         _check(owner, "lookahead_max", self.lookahead_max, self.lookahead_min)
+        _check(owner, "lookahead_radius_ratio", self.lookahead_radius_ratio, 1e-9)
+        _check(owner, "slip_stiffness", self.slip_stiffness, 1e-9)
+        _check(owner, "downforce_per_mass", self.downforce_per_mass, 0.0)
         _check(owner, "rear_axle_x", self.rear_axle_x, -math.inf, math.inf)
 
 
@@ -309,10 +342,13 @@ class SpeedControlConfig(Settings):
             overshoot the next target.
         max_accel: largest acceleration command [m/s^2] (EUFS +3, less 0.3 %).
         max_decel: largest deceleration command [m/s^2], > 0 (EUFS -10).
-        lateral_grip: the tyres' lateral grip G [m/s^2] for the friction
-            ellipse of the command (``planner.speed_control.ellipse_limits``);
-            inf: no ellipse.
-        ellipse_floor: the least fraction of the limits the ellipse leaves [-].
+        lateral_grip: the tyres' lateral grip G at rest [m/s^2] for the
+            friction ellipse of the command
+            (``planner.speed_control.ellipse_limits``); inf: no ellipse.
+        grip_aero: growth of that grip with speed squared, from downforce
+            [1/m]: G(v) = lateral_grip + grip_aero v^2.
+        ellipse_floor: the least fraction of the braking limit the ellipse
+            leaves [-] (none of the drive's is left at the grip).
         preview_time: the target speed is read this far ahead along the path [s].
         preview_min: and at least this far [m].
     """
@@ -328,7 +364,11 @@ class SpeedControlConfig(Settings):
     # lap-time checks ask for a lap above the limit.
     max_accel: float = 2.99  # [m/s^2]
     max_decel: float = 10.0  # [m/s^2] EUFS
-    lateral_grip: float = 15.7  # [m/s^2] fssim tyre D = 1.6 times g, no downforce
+    # The speed profile's own limits (a_lat_max, a_lat_aero), not the tyre's
+    # full 15.7 + 0.016 v^2: braking within the tyre's ellipse, the car spun
+    # in the trackdrive's S-bend at 18 m/s.
+    lateral_grip: float = 14.0  # [m/s^2]
+    grip_aero: float = 0.0143  # [1/m]
     ellipse_floor: float = 0.3  # [-]
     preview_time: float = 0.3  # [s]
     preview_min: float = 1.0  # [m]
@@ -347,6 +387,7 @@ class SpeedControlConfig(Settings):
         for name in ("max_accel", "max_decel", "lateral_grip"):
             _check("SpeedControlConfig", name, getattr(self, name), 1e-9)
         _check("SpeedControlConfig", "ellipse_floor", self.ellipse_floor, 0.0, 1.0)
+        _check("SpeedControlConfig", "grip_aero", self.grip_aero, 0.0)
 
 
 @dataclass(frozen=True)

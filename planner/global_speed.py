@@ -24,15 +24,21 @@ import numpy as np
 from localization.global_path import GlobalPath
 from planner.config import SpeedProfileConfig
 from planner.geometry import FloatArray, arc_length
-from planner.speed_profile import speed_profile
+from planner.speed_profile import menger_curvature, speed_profile, window_mean
 
 
 class GlobalSpeedPlan:
-    """Speeds along the global path.
+    """Speeds, and the curvature they come from, along the global path.
 
     Args:
         path: the global path in ``reference``.
         config: the same limits as the local speed profile.
+
+    Attributes:
+        stations: (k,) arc length of the path's points [m].
+        speeds: (k,) allowed speed there [m/s].
+        curvature: (k,) the path's curvature averaged over
+            ``curvature_window``, as the speed profile reads it [1/m].
     """
 
     def __init__(self, path: GlobalPath, config: SpeedProfileConfig) -> None:
@@ -46,12 +52,15 @@ class GlobalSpeedPlan:
             free = dataclasses.replace(config, horizon_stop=False)
             v = speed_profile(laps, free)
             n = len(pts)
+            k = _curvature(laps, config.curvature_window)
             self.stations: FloatArray = stations
             self.speeds: FloatArray = np.append(v[n : 2 * n], v[n])
+            self.curvature: FloatArray = np.append(k[n : 2 * n], k[n])
         else:
             self.stations = arc_length(pts)
             self.length = float(self.stations[-1])
             self.speeds = speed_profile(pts, dataclasses.replace(config, horizon_stop=True))
+            self.curvature = _curvature(pts, config.curvature_window)
 
     def speed_at(self, station: float) -> float:
         """Allowed speed at arc length ``station`` [m] along the global path [m/s]."""
@@ -61,7 +70,20 @@ class GlobalSpeedPlan:
 
     def speeds_at(self, stations: FloatArray) -> FloatArray:
         """Allowed speeds (n,) [m/s] at arc lengths ``stations`` (n,) [m]."""
+        return np.interp(self._wrap(stations), self.stations, self.speeds)
+
+    def curvature_at(self, stations: FloatArray) -> FloatArray:
+        """Curvature (n,) [1/m] at arc lengths ``stations`` (n,) [m]."""
+        return np.interp(self._wrap(stations), self.stations, self.curvature)
+
+    def _wrap(self, stations: FloatArray) -> FloatArray:
         st = np.asarray(stations, dtype=float)
-        if self.closed:
-            st = np.mod(st, self.length)
-        return np.interp(st, self.stations, self.speeds)
+        return np.mod(st, self.length) if self.closed else st
+
+
+def _curvature(points: FloatArray, window: float) -> FloatArray:
+    """Menger curvature (n,) [1/m] of (n, 2) points, averaged over ``window`` [m]."""
+    kappa = menger_curvature(points)
+    if window > 0.0 and len(points) > 2:
+        kappa = window_mean(kappa, float(arc_length(points)[-1]) / (len(points) - 1), window)
+    return kappa

@@ -51,24 +51,28 @@ def target_on_path(
     return v_ref, a_ff
 
 
-def ellipse_limits(a_lat: float, config: SpeedControlConfig) -> tuple[float, float]:
+def ellipse_limits(
+    a_lat: float, config: SpeedControlConfig, speed: float = 0.0
+) -> tuple[float, float]:
     """The acceleration and deceleration limits [m/s^2] left by a corner.
 
-    Inside the friction ellipse, with the tyres' lateral grip ``G``
-    (``lateral_grip``), cornering at ``a_lat`` leaves the fraction
-    ``max(ellipse_floor, sqrt(1 - (a_lat / G)^2))`` of the longitudinal
-    limits. Braking at the full -10 m/s^2 while turning at the lateral limit
-    asks the tyres for more than they have and the car slides (seen on the
+    Inside the friction ellipse, with the lateral grip
+    ``G = lateral_grip + grip_aero v^2`` at speed v [m/s], cornering at
+    ``a_lat`` leaves the fraction ``sqrt(1 - (a_lat / G)^2)`` of the
+    longitudinal limits, and at least ``ellipse_floor`` of the braking limit.
+    Braking at the full -10 m/s^2 while turning at the lateral limit asks the
+    tyres for more than they have and the car slides (seen on the
     trackdrive's S-bend at 17 m/s: the profile brakes for the next corner
     while the car is still turning out of the last). The floor keeps some
-    braking however hard the steering asks (which then slows the car).
+    braking however hard the steering asks (which then slows the car); at
+    the grip there is no drive left, so the car does not push on.
     """
     c = config
     if not c.lateral_grip < float("inf"):
         return c.max_accel, c.max_decel
-    ratio = min(abs(a_lat) / c.lateral_grip, 1.0)
-    scale = max(c.ellipse_floor, (1.0 - ratio * ratio) ** 0.5)
-    return c.max_accel * scale, c.max_decel * scale
+    ratio = min(abs(a_lat) / (c.lateral_grip + c.grip_aero * speed * speed), 1.0)
+    scale = (1.0 - ratio * ratio) ** 0.5
+    return c.max_accel * scale, c.max_decel * max(c.ellipse_floor, scale)
 
 
 class SpeedController:
@@ -103,7 +107,7 @@ class SpeedController:
                 (``ellipse_limits``).
         """
         c = self.config
-        max_accel, max_decel = ellipse_limits(a_lat, c)
+        max_accel, max_decel = ellipse_limits(a_lat, c, speed)
         error = v_ref - speed
         base = c.feed_forward * a_ff + c.kp * error
         saturated_up = base + c.ki * self.integral >= max_accel and error > 0.0

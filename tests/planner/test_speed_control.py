@@ -73,11 +73,15 @@ def test_integral_waits_for_a_small_error() -> None:
 
 
 def test_ellipse_limits_share_the_grip_with_the_corner() -> None:
-    """G = 15 m/s^2: at a_lat 12 (0.8 G) sqrt(1 - 0.64) = 0.6 of +3 / -10; at >= G the floor 0.3."""
-    config = SpeedControlConfig(max_accel=3.0, lateral_grip=15.0, ellipse_floor=0.3)
+    """G = 15 m/s^2: at a_lat 12 (0.8 G) sqrt(1 - 0.64) = 0.6 of +3 / -10; at >= G no drive,
+    braking the floor 0.3; with downforce G(10 m/s) = 15 + 0.05 * 100 = 20: a_lat 12 is 0.6 G,
+    0.8 of the limits."""
+    config = SpeedControlConfig(max_accel=3.0, lateral_grip=15.0, grip_aero=0.0, ellipse_floor=0.3)
     assert ellipse_limits(0.0, config) == (3.0, 10.0)
     assert_allclose(ellipse_limits(-12.0, config), (1.8, 6.0), rtol=1e-12)
-    assert_allclose(ellipse_limits(20.0, config), (0.9, 3.0), rtol=1e-12)
+    assert_allclose(ellipse_limits(20.0, config), (0.0, 3.0), rtol=1e-12)
+    aero = SpeedControlConfig(max_accel=3.0, lateral_grip=15.0, grip_aero=0.05)
+    assert_allclose(ellipse_limits(12.0, aero, speed=10.0), (2.4, 8.0), rtol=1e-12)
     controller = SpeedController(config)
     assert controller.step(0.0, 10.0, DT, a_lat=12.0) == pytest.approx(-6.0)
     assert controller.step(20.0, 10.0, DT, a_lat=12.0) == pytest.approx(1.8)
