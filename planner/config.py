@@ -253,13 +253,13 @@ class SpeedProfileConfig(Settings):
     """
 
     # The tyre (fssim D = 1.6, mu = 1) grips 1.6 g = 15.7 m/s^2 before downforce;
-    # 14 leaves about 10 % for tracking corrections (lap tests, seeds 0-4).
+    # 14 leaves about 10 % for tracking corrections (lap tests, seeds 0-5).
     a_lat_max: float = 14.0  # [m/s^2]
     # fssim C_Down 1.903 N s^2/m^2 on 190 kg, times the tyre's 1.6: 0.016 1/m
     # (11 m/s^2 more at 26 m/s); planned at the same 14 / 15.7 share as a_lat_max.
     a_lat_aero: float = 0.0143  # [1/m]
     a_drive: float = 3.0  # [m/s^2] EUFS +3
-    a_brake: float = 8.0  # [m/s^2] margin below EUFS -10 for the 0.2 s detection latency
+    a_brake: float = 8.0  # [m/s^2] planning margin below EUFS -10
     v_max: float = 25.0  # [m/s] below the car's ~29.7 m/s top speed
     horizon_stop: bool = True
     curvature_window: float = 2.0  # [m] tuned on the shipped tracks (lap tests, 3 seeds)

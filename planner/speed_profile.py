@@ -37,7 +37,8 @@ Vehicle Dynamics", ch. 2): on a step the longitudinal limit is
 starts from (``ellipse_forward_pass``, ``ellipse_backward_pass``). Without it
 the car plans to brake at the full ``a_brake`` while already cornering at
 ``a_lat_max``, more than the tyres give, and slides. These passes are loops
-(the limit depends on the speed), about 0.1 ms per 60 waypoints.
+(the limit depends on the speed): 0.15 ms per 60 waypoints with the jerk
+limit, against 0.05 ms for the closed-form passes.
 
 Written for speed (per plan, on ~60 waypoints): the step vectors and lengths
 are computed once for the arc length and the curvature.
