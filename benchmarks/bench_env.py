@@ -76,7 +76,10 @@ def main() -> None:
         r = run_scenario(track, laps=2, seed=0)
         best = "n/a" if r.best_lap_s is None else f"{r.best_lap_s:6.2f} s"
         ratio = "n/a" if r.lap_time_ratio is None else f"{r.lap_time_ratio:4.2f}x"
-        print(f"  {track:12s} best {best}  limit {r.limit_lap_time_s:6.2f} s  ratio {ratio}")
+        print(
+            f"  {track:12s} best {best}  limit {r.limit_lap_time_s:6.2f} s  ratio {ratio}"
+            f"  cones hit {r.cones_hit}"
+        )
 
 
 if __name__ == "__main__":

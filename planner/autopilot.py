@@ -7,6 +7,9 @@ localization), the global path, and the messages it receives.
   ``classify_cones_by_side`` at the detection's stamp (if the frame tree has
   no transform there yet, at the latest one, counted in ``tf_latest_count``)
   and ``reference_path_planning`` with the latest transform, as in the seed.
+  With ``speed_source = "global"`` the waypoints' speeds are then the
+  global path's speed plan at their stations (``planner.global_speed``),
+  limited to what the car reaches accelerating from its speed.
   The plan's path is also kept in ``reference``, and the sensor's station
   along the global path is kept as the next classification's
   ``station_hint``.
@@ -15,7 +18,9 @@ localization), the global path, and the messages it receives.
 - Control runs at ``control_rate`` (50 Hz): the path is brought from
   ``reference`` into the current ``os_sensor`` frame, pure pursuit steers
   toward its lookahead point, and the PI controller tracks the waypoint
-  speeds. Without a path the car brakes to a stop with the wheels straight.
+  speeds, within the friction ellipse left by the lateral acceleration the
+  steering asks for (v^2 tan(delta) / L). Without a path the car brakes to
+  a stop with the wheels straight.
 
 Every intermediate is an attribute for drawing and recording: ``classified``
 (left/right cones in ``reference``), ``plan`` (bridge lines, midpoints, path,
@@ -41,9 +46,9 @@ from planner.geometry import FloatArray, PathProjector, arc_length
 from planner.global_speed import GlobalSpeedPlan
 from planner.messages import ControlCommand
 from planner.midline import LocalPlan, PlanStatus, reference_path_planning
-from planner.pure_pursuit import SteeringResult, pure_pursuit
+from planner.pure_pursuit import SteeringResult, lookahead_distance, pure_pursuit
 from planner.speed_control import SpeedController, target_on_path
-from planner.speed_profile import speed_profile
+from planner.speed_profile import forward_pass, speed_profile
 
 _TIME_EPS = 1e-9  # [s] tolerance of the control schedule
 
@@ -74,6 +79,7 @@ class Autopilot:
         self.path_reference: FloatArray = np.zeros((0, 2))
         self.path_now: FloatArray = np.zeros((0, 2))
         self.steering: SteeringResult | None = None
+        self.path_curvature: FloatArray = np.zeros(0)  # [1/m] global, at the waypoints
         self.target_speed = 0.0  # [m/s]
         self.command: ControlCommand | None = None
         self.wheel_speed: float | None = None  # [m/s]
@@ -167,6 +173,15 @@ class Autopilot:
         """The plan's speeds ending at the global path's speed where the path ends."""
         assert self.global_speed is not None
         s = arc_length(plan.path)
+        if self.config.speed_source == "global":
+            # The waypoints' stations: the sensor's, plus the path's first
+            # point's distance ahead (x in ``os_sensor``), plus arc length.
+            stations = sensor_station + float(plan.path[0, 0]) + s
+            self.path_curvature = self.global_speed.curvature_at(stations)
+            v = self.global_speed.speeds_at(stations)
+            v[0] = min(v[0], max(self.speed(), 0.0))
+            v = forward_pass(s, v, self.config.speed_profile.a_drive)
+            return dataclasses.replace(plan, speeds=v)
         v_end = self.global_speed.speed_at(sensor_station + float(s[-1]))
         speeds = speed_profile(plan.path, self.config.speed_profile, self.speed(), s=s, v_end=v_end)
         return dataclasses.replace(plan, speeds=speeds)
@@ -202,13 +217,34 @@ class Autopilot:
             acceleration = self.speed_controller.step(0.0, speed, dt)
             self.command = ControlCommand(t, 0.0, acceleration)
             return self.command
-        self.steering = pure_pursuit(path, speed, c.pure_pursuit)
+        self.steering = pure_pursuit(path, speed, c.pure_pursuit, self._lookahead_cap(path, speed))
         axle = np.array([c.pure_pursuit.rear_axle_x, 0.0])
         v_ref, a_ff = target_on_path(path, self.plan.speeds, axle, speed, c.speed_control)
         self.target_speed = v_ref
-        acceleration = self.speed_controller.step(v_ref, speed, dt, a_ff)
+        a_lat = speed * speed * math.tan(self.steering.steering) / c.pure_pursuit.wheelbase
+        acceleration = self.speed_controller.step(v_ref, speed, dt, a_ff, a_lat)
         self.command = ControlCommand(t, self.steering.steering, acceleration)
         return self.command
+
+    def _lookahead_cap(self, path: FloatArray, speed: float) -> float | None:
+        """``lookahead_radius_ratio`` times the tightest radius within the lookahead [m].
+
+        The radius is the global path's at the waypoints (``path_curvature``,
+        with ``speed_source = "global"``) from the one nearest the rear axle
+        to one lookahead distance on. A lookahead longer than the radius aims
+        across the inside of a hairpin: the chord of L_d in a circle of R
+        lies R - sqrt(R^2 - L_d^2 / 4) inside it, 0.96 m for 4.9 m in 3.5 m
+        but 0.47 m for L_d = R.
+        """
+        pp = self.config.pure_pursuit
+        if len(self.path_curvature) != len(path) or len(path) < 2:
+            return None
+        axle = np.array([pp.rear_axle_x, 0.0])
+        s = arc_length(path)
+        nearest = int(np.argmin(np.hypot(path[:, 0] - axle[0], path[:, 1] - axle[1])))
+        ahead = (s >= s[nearest]) & (s <= s[nearest] + lookahead_distance(speed, pp))
+        kappa = float(np.max(np.abs(self.path_curvature[ahead])))
+        return pp.lookahead_radius_ratio / kappa if kappa > 0.0 else None
 
     def _path_in_sensor_frame(self) -> FloatArray:
         """The plan's path in the latest ``os_sensor`` frame (the planned one if that fails)."""

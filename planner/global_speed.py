@@ -6,7 +6,9 @@ also carries the global path, so it knows what lies beyond the cones in view:
 this module runs the same speed profile (curvature limit, drive and brake
 passes, ``planner.speed_profile``) once along the whole global path, and the
 autopilot lets the local plan end at the global plan's speed at that station
-instead of at 0. Steering still follows only the cones in view.
+instead of at 0, or (``AutopilotConfig.speed_source = "global"``) takes
+the global plan's speed at every waypoint. Steering still follows only the
+cones in view.
 
 A closed path is profiled over three laps and the middle one kept, so the
 speed at the start/finish line is that of a flying lap; an open path stops at
@@ -22,15 +24,21 @@ import numpy as np
 from localization.global_path import GlobalPath
 from planner.config import SpeedProfileConfig
 from planner.geometry import FloatArray, arc_length
-from planner.speed_profile import speed_profile
+from planner.speed_profile import menger_curvature, speed_profile, window_mean
 
 
 class GlobalSpeedPlan:
-    """Speeds along the global path.
+    """Speeds, and the curvature they come from, along the global path.
 
     Args:
         path: the global path in ``reference``.
         config: the same limits as the local speed profile.
+
+    Attributes:
+        stations: (k,) arc length of the path's points [m].
+        speeds: (k,) allowed speed there [m/s].
+        curvature: (k,) the path's curvature averaged over
+            ``curvature_window``, as the speed profile reads it [1/m].
     """
 
     def __init__(self, path: GlobalPath, config: SpeedProfileConfig) -> None:
@@ -44,15 +52,38 @@ class GlobalSpeedPlan:
             free = dataclasses.replace(config, horizon_stop=False)
             v = speed_profile(laps, free)
             n = len(pts)
+            k = _curvature(laps, config.curvature_window)
             self.stations: FloatArray = stations
             self.speeds: FloatArray = np.append(v[n : 2 * n], v[n])
+            self.curvature: FloatArray = np.append(k[n : 2 * n], k[n])
         else:
             self.stations = arc_length(pts)
             self.length = float(self.stations[-1])
             self.speeds = speed_profile(pts, dataclasses.replace(config, horizon_stop=True))
+            self.curvature = _curvature(pts, config.curvature_window)
 
     def speed_at(self, station: float) -> float:
         """Allowed speed at arc length ``station`` [m] along the global path [m/s]."""
         if self.closed:
             station %= self.length
         return float(np.interp(station, self.stations, self.speeds))
+
+    def speeds_at(self, stations: FloatArray) -> FloatArray:
+        """Allowed speeds (n,) [m/s] at arc lengths ``stations`` (n,) [m]."""
+        return np.interp(self._wrap(stations), self.stations, self.speeds)
+
+    def curvature_at(self, stations: FloatArray) -> FloatArray:
+        """Curvature (n,) [1/m] at arc lengths ``stations`` (n,) [m]."""
+        return np.interp(self._wrap(stations), self.stations, self.curvature)
+
+    def _wrap(self, stations: FloatArray) -> FloatArray:
+        st = np.asarray(stations, dtype=float)
+        return np.mod(st, self.length) if self.closed else st
+
+
+def _curvature(points: FloatArray, window: float) -> FloatArray:
+    """Menger curvature (n,) [1/m] of (n, 2) points, averaged over ``window`` [m]."""
+    kappa = menger_curvature(points)
+    if window > 0.0 and len(points) > 2:
+        kappa = window_mean(kappa, float(arc_length(points)[-1]) / (len(points) - 1), window)
+    return kappa

@@ -8,7 +8,9 @@ wheel angle::
 
     delta = atan(L * kappa) = atan(2 L sin(alpha) / L_d)
 
-clipped to +-max_steer. The lookahead distance grows with speed,
+clipped to +-max_steer; with ``slip_stiffness`` alpha is measured from the
+rear axle's velocity, alpha + alpha_r (``rear_slip_angle``). The lookahead
+distance grows with speed,
 ``L_d = clip(lookahead_min + lookahead_gain * v, lookahead_min, lookahead_max)``,
 and the target is where the path leaves the circle of radius L_d about the
 rear axle, searching forward from the path point nearest the axle
@@ -26,6 +28,8 @@ import numpy as np
 
 from planner.config import PurePursuitConfig
 from planner.geometry import FloatArray
+
+_GRAVITY = 9.81  # [m/s^2]
 
 
 @dataclass(frozen=True, slots=True)
@@ -96,17 +100,59 @@ def pure_pursuit_angle(target: FloatArray, wheelbase: float) -> tuple[float, flo
     return math.atan(2.0 * wheelbase * math.sin(alpha) / distance), alpha, distance
 
 
-def pure_pursuit(path: FloatArray, speed: float, config: PurePursuitConfig) -> SteeringResult:
+def rear_slip_angle(
+    speed: float, alpha: float, distance: float, config: PurePursuitConfig
+) -> float:
+    """Expected slip angle of the rear axle on the pursuit arc [rad], + when turning left.
+
+    Cornering, the rear tyres run at a slip angle: the rear axle moves at
+    alpha_r outward of the car's heading, and pure pursuit's arc, tangent to
+    the heading, turns less than the path. The car then settles outside the
+    path (0.6 m at 15 m/s in the trackdrive's R 14 m corner). Measuring the
+    target's angle from the axle's velocity instead adds alpha_r to alpha.
+    With the linear tyre (slope B C D per radian of the friction used, the
+    friction used being the lateral acceleration over the normal load per
+    mass, g plus downforce)::
+
+        a_lat   = v^2 * 2 sin(alpha) / L_d            (the pursuit arc)
+        alpha_r = a_lat / (slip_stiffness * (g + downforce_per_mass * v^2))
+
+    Args:
+        speed: [m/s].
+        alpha: the target's angle from the heading [rad].
+        distance: the target's distance from the rear axle [m].
+        config: ``slip_stiffness`` (inf: no slip) and ``downforce_per_mass``.
+    """
+    if not config.slip_stiffness < math.inf or distance <= 0.0:
+        return 0.0
+    a_lat = speed * speed * 2.0 * math.sin(alpha) / distance
+    load = _GRAVITY + config.downforce_per_mass * speed * speed
+    return a_lat / (config.slip_stiffness * load)
+
+
+def pure_pursuit(
+    path: FloatArray,
+    speed: float,
+    config: PurePursuitConfig,
+    lookahead_cap: float | None = None,
+) -> SteeringResult:
     """Steer toward the lookahead point of a path (n, 2) in the vehicle's frame [m].
 
     Args:
         path: the local path in ``os_sensor`` (x forward, y left), n >= 1.
         speed: current speed [m/s].
         config: geometry, limits and lookahead law.
+        lookahead_cap: the lookahead distance is at most this [m] (not below
+            ``lookahead_min``); None: the law alone.
     """
     axle = np.array([config.rear_axle_x, 0.0])
     lookahead = lookahead_distance(speed, config)
+    if lookahead_cap is not None:
+        lookahead = max(min(lookahead, lookahead_cap), config.lookahead_min)
     target, index = find_lookahead_point(path, axle, lookahead)
     delta, alpha, distance = pure_pursuit_angle(target - axle, config.wheelbase)
+    slip = rear_slip_angle(speed, alpha, distance, config)
+    if slip != 0.0:
+        delta = math.atan(2.0 * config.wheelbase * math.sin(alpha + slip) / distance)
     steering = min(max(delta, -config.max_steer), config.max_steer)
     return SteeringResult(steering, target, index, alpha, distance, lookahead)

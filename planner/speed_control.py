@@ -51,6 +51,30 @@ def target_on_path(
     return v_ref, a_ff
 
 
+def ellipse_limits(
+    a_lat: float, config: SpeedControlConfig, speed: float = 0.0
+) -> tuple[float, float]:
+    """The acceleration and deceleration limits [m/s^2] left by a corner.
+
+    Inside the friction ellipse, with the lateral grip
+    ``G = lateral_grip + grip_aero v^2`` at speed v [m/s], cornering at
+    ``a_lat`` leaves the fraction ``sqrt(1 - (a_lat / G)^2)`` of the
+    longitudinal limits, and at least ``ellipse_floor`` of the braking limit.
+    Braking at the full -10 m/s^2 while turning at the lateral limit asks the
+    tyres for more than they have and the car slides (seen on the
+    trackdrive's S-bend at 17 m/s: the profile brakes for the next corner
+    while the car is still turning out of the last). The floor keeps some
+    braking however hard the steering asks (which then slows the car); at
+    the grip there is no drive left, so the car does not push on.
+    """
+    c = config
+    if not c.lateral_grip < float("inf"):
+        return c.max_accel, c.max_decel
+    ratio = min(abs(a_lat) / (c.lateral_grip + c.grip_aero * speed * speed), 1.0)
+    scale = (1.0 - ratio * ratio) ** 0.5
+    return c.max_accel * scale, c.max_decel * max(c.ellipse_floor, scale)
+
+
 class SpeedController:
     """PI speed controller with feed-forward and anti-windup (module docstring).
 
@@ -69,7 +93,9 @@ class SpeedController:
         """Forget the integrated error."""
         self.integral = 0.0
 
-    def step(self, v_ref: float, speed: float, dt: float, a_ff: float = 0.0) -> float:
+    def step(
+        self, v_ref: float, speed: float, dt: float, a_ff: float = 0.0, a_lat: float = 0.0
+    ) -> float:
         """One control step: the acceleration command [m/s^2].
 
         Args:
@@ -77,14 +103,18 @@ class SpeedController:
             speed: measured speed [m/s].
             dt: time since the last step [s].
             a_ff: planned acceleration to feed forward [m/s^2].
+            a_lat: lateral acceleration the steering asks for now [m/s^2]
+                (``ellipse_limits``).
         """
         c = self.config
+        max_accel, max_decel = ellipse_limits(a_lat, c, speed)
         error = v_ref - speed
         base = c.feed_forward * a_ff + c.kp * error
-        saturated_up = base + c.ki * self.integral >= c.max_accel and error > 0.0
-        saturated_down = base + c.ki * self.integral <= -c.max_decel and error < 0.0
-        if not (saturated_up or saturated_down):
+        saturated_up = base + c.ki * self.integral >= max_accel and error > 0.0
+        saturated_down = base + c.ki * self.integral <= -max_decel and error < 0.0
+        outside_band = abs(error) > c.integral_band
+        if not (saturated_up or saturated_down or outside_band):
             limit = c.integral_limit
             self.integral = min(max(self.integral + error * dt, -limit), limit)
         command = base + c.ki * self.integral
-        return min(max(command, -c.max_decel), c.max_accel)
+        return min(max(command, -max_decel), max_accel)

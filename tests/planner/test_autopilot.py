@@ -14,6 +14,7 @@ from types import ModuleType
 
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
 
 from localization.frames import Buffer
 from localization.messages import ConeDetections, Header, Message, WheelSpeed
@@ -47,7 +48,9 @@ class Bicycle:
         return Pose2D(self.x + AXLE_TO_ANTENNA * c, self.y + AXLE_TO_ANTENNA * s, self.yaw)
 
 
-def drive(synth: ModuleType, track, seconds: float) -> tuple[Autopilot, list[ControlCommand], list]:
+def drive(
+    synth: ModuleType, track, seconds: float, config: AutopilotConfig | None = None
+) -> tuple[Autopilot, list[ControlCommand], list]:
     """Run the closed loop on ``track`` from its first centreline point at rest."""
     start = synth.pose_on(track, 0)
     car = Bicycle(
@@ -56,7 +59,7 @@ def drive(synth: ModuleType, track, seconds: float) -> tuple[Autopilot, list[Con
         start.yaw,
     )
     buffer = Buffer()
-    autopilot = Autopilot(buffer, track.global_path)
+    autopilot = Autopilot(buffer, track.global_path, config)
     cones = np.vstack([track.left, track.right])
     pending: list[tuple[float, ConeDetections]] = []
     command = ControlCommand(0.0, 0.0, 0.0)
@@ -82,13 +85,23 @@ def drive(synth: ModuleType, track, seconds: float) -> tuple[Autopilot, list[Con
 
 
 def test_closed_loop_on_a_circle(synth: ModuleType, circle) -> None:
-    """12 s on the R = 15 m circle: within 0.3 m of the centreline, up to speed, no fallback."""
-    autopilot, commands, trace = drive(synth, circle, 12.0)
+    """12 s on the R = 15 m circle: within 0.3 m of the centreline, up to speed, no fallback.
+
+    The kinematic plant's wheels do not slip, so pure pursuit's rear-slip
+    compensation is off here (with it the car runs 0.31 m inside).
+    """
+    no_slip = AutopilotConfig.from_dict({"pure_pursuit": {"slip_stiffness": math.inf}})
+    autopilot, commands, trace = drive(synth, circle, 12.0, no_slip)
     radius = np.array([math.hypot(p.x, p.y) for _, p, _ in trace])
     speeds = np.array([v for _, _, v in trace])
     assert np.max(np.abs(radius - 15.0)) < 0.3
-    # a_lat_max = 6 m/s^2 on R = 15 m: sqrt(6 * 15) = 9.5 m/s at most.
-    assert 7.0 < speeds[-1] < math.sqrt(6.0 * 15.0) + 0.3
+    # a_lat = 14 + 0.0143 v^2 [m/s^2] on R = 15 m: v^2 = 14 / (1/15 - 0.0143),
+    # 16.35 m/s at most, reached from rest at 3 m/s^2 in under 6 s.
+    profile = AutopilotConfig().speed_profile
+    assert (profile.a_lat_max, profile.a_lat_aero) == (14.0, 0.0143)
+    v_circle = math.sqrt(14.0 / (1.0 / 15.0 - 0.0143))
+    assert v_circle == pytest.approx(16.35, abs=0.01)
+    assert v_circle - 1.0 < speeds[-1] < v_circle + 0.3
     assert len(commands) == 600  # 50 Hz for 12 s
     assert autopilot.plan_count == 119  # 10 Hz, the first delivered at 0.1 s
     assert autopilot.fallback_count == autopilot.failed_count == autopilot.skipped_count == 0
@@ -101,6 +114,10 @@ def test_closed_loop_on_a_circle(synth: ModuleType, circle) -> None:
     assert plan.waypoints().speeds.shape == (len(plan.path),)
     assert autopilot.lookahead_point is not None and autopilot.path_now.shape[1] == 2
     assert autopilot.target_speed > 0.0
+    # speed_source "global": the waypoints' speeds are the global plan's,
+    # 16.35 m/s all round the circle, once the car is at it.
+    assert autopilot.global_speed is not None
+    assert_allclose(plan.speeds[5:], v_circle, rtol=2e-3)
 
 
 def test_closed_loop_is_deterministic(synth: ModuleType, hairpin) -> None:
@@ -111,12 +128,25 @@ def test_closed_loop_is_deterministic(synth: ModuleType, hairpin) -> None:
 
 
 def test_closed_loop_through_a_hairpin(synth: ModuleType, hairpin) -> None:
-    """Around the R = 3.5 m hairpin: within 0.5 m of the middle (measured 0.36 m, cut inside)."""
-    autopilot, _, trace = drive(synth, hairpin, 9.0)
+    """Around the R = 3.5 m hairpin: within 0.6 m of the middle (measured 0.53 m, cut inside).
+
+    At sqrt(14 / (1/3.5 - 0.0143)) = 7.2 m/s the lookahead law gives
+    2 + 0.4 * 7.2 = 4.9 m, whose chord in R = 3.5 m lies
+    R - sqrt(R^2 - (L_d / 2)^2) = 0.96 m inside: more than the 0.8 m a 1.4 m
+    car has in a 3 m lane. Capped at the radius (lookahead_radius_ratio 1),
+    the chord lies 0.47 m inside.
+    """
+    autopilot, _, trace = drive(synth, hairpin, 7.5)  # 9 s runs past the last cones
     antenna = np.array([[p.x, p.y] for _, p, _ in trace])
-    assert np.max(hairpin.distance_to_centre(antenna)) < 0.5
+    chord = 3.5 - math.sqrt(3.5**2 - (3.5 / 2) ** 2)
+    assert chord == pytest.approx(0.47, abs=0.01)
+    assert np.max(hairpin.distance_to_centre(antenna)) < 0.6
     assert antenna[-1, 1] > 6.5 and antenna[-1, 0] < -5.0  # on the exit leg (y = 7 m)
     assert autopilot.fallback_count == 0
+    uncapped = AutopilotConfig.from_dict({"pure_pursuit": {"lookahead_radius_ratio": math.inf}})
+    _, _, trace = drive(synth, hairpin, 7.5, uncapped)
+    wide = np.array([[p.x, p.y] for _, p, _ in trace])
+    assert np.max(hairpin.distance_to_centre(wide)) > 0.8
 
 
 def test_control_runs_at_its_own_rate(synth: ModuleType, straight) -> None:

@@ -9,6 +9,7 @@ from planner import (
     ClassifierConfig,
     MidlineConfig,
     PurePursuitConfig,
+    SpeedControlConfig,
     SpeedProfileConfig,
 )
 
@@ -54,6 +55,15 @@ def test_unknown_nested_key_raises() -> None:
         (ClassifierConfig, {"mode": "magic"}),
         (ClassifierConfig, {"left_colours": ("blue",), "right_colours": ("blue",)}),
         (AutopilotConfig, {"control_rate": 0.0}),
+        (AutopilotConfig, {"speed_source": "map"}),
+        (SpeedControlConfig, {"integral_band": -1.0}),
+        (SpeedControlConfig, {"lateral_grip": 0.0}),
+        (SpeedControlConfig, {"ellipse_floor": 1.5}),
+        (SpeedControlConfig, {"grip_aero": -0.01}),
+        (SpeedProfileConfig, {"a_lat_aero": -0.01}),
+        (SpeedProfileConfig, {"lateral_jerk_max": 0.0}),
+        (PurePursuitConfig, {"lookahead_radius_ratio": 0.0}),
+        (PurePursuitConfig, {"slip_stiffness": 0.0}),
     ],
 )
 def test_out_of_range_values_raise(cls: type, values: dict[str, object]) -> None:

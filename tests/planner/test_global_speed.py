@@ -17,9 +17,13 @@ def test_circle_speed_is_sqrt_a_lat_r_everywhere() -> None:
     """A closed circle of R = 10 m: sqrt(a_lat R) = sqrt(60) = 7.75 m/s at every station."""
     t = np.linspace(0.0, 2 * math.pi, 200, endpoint=False)
     path = global_path_from_centreline(np.column_stack([10 * np.cos(t), 10 * np.sin(t)]), True)
-    plan = GlobalSpeedPlan(path, SpeedProfileConfig())
+    plan = GlobalSpeedPlan(path, SpeedProfileConfig(a_lat_max=6.0, a_lat_aero=0.0))
     for station in (0.0, 17.0, 40.0, plan.length + 3.0):
         assert_allclose(plan.speed_at(station), math.sqrt(6.0 * 10.0), rtol=1e-3)
+    # With downforce, v^2 / R = 6 + 0.02 v^2: v = sqrt(6 / (0.1 - 0.02)) = 8.66 m/s.
+    aero = GlobalSpeedPlan(path, SpeedProfileConfig(a_lat_max=6.0, a_lat_aero=0.02))
+    assert_allclose(aero.speed_at(17.0), math.sqrt(6.0 / 0.08), rtol=1e-3)
+    assert_allclose(plan.curvature_at(np.array([0.0, 17.0, plan.length + 3.0])), 0.1, rtol=1e-3)
 
 
 def test_open_path_brakes_to_its_end() -> None:
@@ -40,3 +44,14 @@ def test_local_profile_ends_at_the_given_speed() -> None:
     assert_allclose(v[-1], 8.0)
     stop = speed_profile(pts, SpeedProfileConfig(), v_start=10.0)
     assert stop[-1] == 0.0 and np.all(stop <= v + 1e-12)
+
+
+def test_speeds_at_wraps_a_closed_path() -> None:
+    """speeds_at equals speed_at point by point, stations past the length wrapping."""
+    t = np.linspace(0.0, 2 * math.pi, 200, endpoint=False)
+    xy = np.column_stack([10 * np.cos(t), 5 * np.sin(t)])  # an ellipse: speeds vary
+    plan = GlobalSpeedPlan(global_path_from_centreline(xy, True), SpeedProfileConfig())
+    stations = np.array([0.0, 3.0, 20.0, plan.length + 3.0, 2 * plan.length + 20.0])
+    expected = [plan.speed_at(s) for s in stations]
+    assert_allclose(plan.speeds_at(stations), expected, rtol=1e-12)
+    assert plan.speeds_at(stations)[1] == plan.speeds_at(stations)[3]

@@ -9,9 +9,11 @@ import pytest
 from numpy.testing import assert_allclose
 
 from planner import PurePursuitConfig, lookahead_distance, pure_pursuit
-from planner.pure_pursuit import find_lookahead_point, pure_pursuit_angle
+from planner.pure_pursuit import find_lookahead_point, pure_pursuit_angle, rear_slip_angle
 
 CONFIG = PurePursuitConfig()  # L = 1.53 m, rear axle at x = -0.465 m in os_sensor
+# The geometry alone: no rear-axle slip (tested on its own below).
+GEOMETRIC = PurePursuitConfig(slip_stiffness=math.inf)
 
 
 def circle_through_axle(radius: float, left: bool = True) -> np.ndarray:
@@ -26,22 +28,22 @@ def circle_through_axle(radius: float, left: bool = True) -> np.ndarray:
 @pytest.mark.parametrize("speed", [0.0, 8.0])
 def test_circle_gives_the_geometric_angle(radius: float, left: bool, speed: float) -> None:
     """On a circle of R through the axle: delta = atan(2 L sin(alpha) / L_d) = atan(L / R)."""
-    result = pure_pursuit(circle_through_axle(radius, left), speed, CONFIG)
-    target = result.target - [CONFIG.rear_axle_x, 0.0]
+    result = pure_pursuit(circle_through_axle(radius, left), speed, GEOMETRIC)
+    target = result.target - [GEOMETRIC.rear_axle_x, 0.0]
     alpha = math.atan2(target[1], target[0])
     distance = math.hypot(*target)
-    expected = math.atan(2 * CONFIG.wheelbase * math.sin(alpha) / distance)
+    expected = math.atan(2 * GEOMETRIC.wheelbase * math.sin(alpha) / distance)
     assert result.steering == pytest.approx(expected, abs=1e-12)
-    assert distance == pytest.approx(lookahead_distance(speed, CONFIG), abs=1e-9)
+    assert distance == pytest.approx(lookahead_distance(speed, GEOMETRIC), abs=1e-9)
     # A chord of the circle: alpha = asin(L_d / 2R), so delta = atan(L / R) (1 cm chords).
-    assert abs(result.steering) == pytest.approx(math.atan(CONFIG.wheelbase / radius), abs=1e-6)
+    assert abs(result.steering) == pytest.approx(math.atan(GEOMETRIC.wheelbase / radius), abs=1e-6)
     assert math.copysign(1.0, result.steering) == (1.0 if left else -1.0)
 
 
 def test_lookahead_grows_with_speed_within_limits() -> None:
-    """L_d = 2 + 0.25 v, clipped to [2, 10] m."""
+    """L_d = 2 + 0.4 v, clipped to [2, 10] m."""
     assert lookahead_distance(0.0, CONFIG) == 2.0
-    assert lookahead_distance(10.0, CONFIG) == pytest.approx(4.5)
+    assert lookahead_distance(10.0, CONFIG) == pytest.approx(6.0)
     assert lookahead_distance(50.0, CONFIG) == 10.0
 
 
@@ -58,7 +60,7 @@ def test_straight_path_ahead_steers_straight() -> None:
     x = np.arange(0.0, 20.0, 0.5)
     result = pure_pursuit(np.column_stack([x, np.zeros_like(x)]), 5.0, CONFIG)
     assert result.steering == 0.0
-    assert_allclose(result.target, [CONFIG.rear_axle_x + 3.25, 0.0], atol=1e-12)
+    assert_allclose(result.target, [CONFIG.rear_axle_x + 4.0, 0.0], atol=1e-12)
 
 
 def test_target_when_the_path_is_short_or_starts_far() -> None:
@@ -68,3 +70,33 @@ def test_target_when_the_path_is_short_or_starts_far() -> None:
     far = np.array([[5.0, 1.0], [6.0, 1.0]])
     assert_allclose(find_lookahead_point(short, centre, 3.0)[0], [1.0, 0.5])
     assert_allclose(find_lookahead_point(far, centre, 3.0)[0], [5.0, 1.0])
+
+
+def test_rear_slip_turns_the_pursuit_further() -> None:
+    """R = 10 m at 10 m/s: a_lat = v^2 2 sin(alpha) / L_d = 10 m/s^2 on the circle.
+
+    alpha_r = 10 / (27.7 (9.81 + 0.01 * 100)) = 0.03340 rad, and the steering
+    is atan(2 L sin(alpha + alpha_r) / L_d), more than atan(L / R) = 0.1519.
+    """
+    path = circle_through_axle(10.0)
+    result = pure_pursuit(path, 10.0, CONFIG)
+    target = result.target - [CONFIG.rear_axle_x, 0.0]
+    alpha, distance = math.atan2(target[1], target[0]), math.hypot(*target)
+    assert 2 * 100.0 * math.sin(alpha) / distance == pytest.approx(10.0, rel=1e-4)
+    slip = rear_slip_angle(10.0, alpha, distance, CONFIG)
+    assert slip == pytest.approx(10.0 / (27.7 * 10.81), rel=1e-4)
+    expected = math.atan(2 * CONFIG.wheelbase * math.sin(alpha + slip) / distance)
+    assert result.steering == pytest.approx(expected, abs=1e-12)
+    assert result.steering == pytest.approx(0.1676, abs=1e-4)  # L_d = 6 m, alpha = asin(0.3)
+    right = pure_pursuit(circle_through_axle(10.0, left=False), 10.0, CONFIG)
+    assert right.steering == pytest.approx(-result.steering, abs=1e-9)
+    assert rear_slip_angle(0.0, alpha, distance, CONFIG) == 0.0
+
+
+def test_lookahead_cap() -> None:
+    """A 3 m cap shortens the 6 m lookahead of 10 m/s; a cap below 2 m gives lookahead_min."""
+    x = np.arange(0.0, 20.0, 0.5)
+    path = np.column_stack([x, np.zeros_like(x)])
+    assert pure_pursuit(path, 10.0, CONFIG).distance == pytest.approx(6.0)
+    assert pure_pursuit(path, 10.0, CONFIG, lookahead_cap=3.0).distance == pytest.approx(3.0)
+    assert pure_pursuit(path, 10.0, CONFIG, lookahead_cap=0.5).distance == pytest.approx(2.0)

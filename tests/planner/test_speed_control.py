@@ -7,6 +7,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from planner import SpeedControlConfig, SpeedController, target_on_path
+from planner.speed_control import ellipse_limits
 
 DT = 0.02  # [s] 50 Hz
 
@@ -60,3 +61,29 @@ def test_target_on_path_reads_the_preview() -> None:
     assert_allclose(
         target_on_path(path[:1], speeds[:1], np.zeros(2), 0.0, SpeedControlConfig()), (2.0, 0.0)
     )
+
+
+def test_integral_waits_for_a_small_error() -> None:
+    """With integral_band = 1 m/s, a 5 m/s error is not integrated; a 0.5 m/s one is, e dt."""
+    controller = SpeedController(SpeedControlConfig(integral_band=1.0))
+    controller.step(10.0, 5.0, DT, a_ff=-8.0)  # unsaturated (-8 + 7.5), but outside the band
+    assert controller.integral == 0.0
+    controller.step(10.0, 9.5, DT)
+    assert controller.integral == pytest.approx(0.5 * DT)
+
+
+def test_ellipse_limits_share_the_grip_with_the_corner() -> None:
+    """G = 15 m/s^2: at a_lat 12 (0.8 G) sqrt(1 - 0.64) = 0.6 of +3 / -10; at >= G no drive,
+    braking the floor 0.3; with downforce G(10 m/s) = 15 + 0.05 * 100 = 20: a_lat 12 is 0.6 G,
+    0.8 of the limits."""
+    config = SpeedControlConfig(max_accel=3.0, lateral_grip=15.0, grip_aero=0.0, ellipse_floor=0.3)
+    assert ellipse_limits(0.0, config) == (3.0, 10.0)
+    assert_allclose(ellipse_limits(-12.0, config), (1.8, 6.0), rtol=1e-12)
+    assert_allclose(ellipse_limits(20.0, config), (0.0, 3.0), rtol=1e-12)
+    aero = SpeedControlConfig(max_accel=3.0, lateral_grip=15.0, grip_aero=0.05)
+    assert_allclose(ellipse_limits(12.0, aero, speed=10.0), (2.4, 8.0), rtol=1e-12)
+    controller = SpeedController(config)
+    assert controller.step(0.0, 10.0, DT, a_lat=12.0) == pytest.approx(-6.0)
+    assert controller.step(20.0, 10.0, DT, a_lat=12.0) == pytest.approx(1.8)
+    free = SpeedControlConfig(max_accel=3.0, lateral_grip=float("inf"))
+    assert ellipse_limits(30.0, free) == (3.0, 10.0)

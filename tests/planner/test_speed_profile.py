@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -9,9 +10,26 @@ import pytest
 from numpy.testing import assert_allclose
 
 from planner import SpeedProfileConfig, speed_profile
-from planner.speed_profile import backward_pass, forward_pass, menger_curvature
+from planner.speed_profile import (
+    backward_pass,
+    curvature_limit,
+    ellipse_backward_pass,
+    ellipse_forward_pass,
+    forward_pass,
+    jerk_limit,
+    menger_curvature,
+)
 
-FREE = SpeedProfileConfig(v_max=100.0, horizon_stop=False, curvature_window=0.0)
+# The worked numbers use 6 m/s^2 lateral and braking and no friction ellipse
+# (tested on its own below).
+LIMITS = {
+    "a_lat_max": 6.0,
+    "a_lat_aero": 0.0,
+    "a_brake": 6.0,
+    "friction_ellipse": False,
+    "lateral_jerk_max": math.inf,
+}
+FREE = SpeedProfileConfig(v_max=100.0, horizon_stop=False, curvature_window=0.0, **LIMITS)
 
 
 def arc(radius: float, length: float, step: float = 0.5, left: bool = True) -> np.ndarray:
@@ -37,7 +55,7 @@ def test_menger_curvature_is_one_over_r_with_sign() -> None:
 
 def test_straight_from_standstill_and_the_cap() -> None:
     """From rest: v = sqrt(2 a_drive s), 6 m/s at s = 6 m with 3 m/s^2, capped at v_max."""
-    config = SpeedProfileConfig(v_max=9.0, horizon_stop=False)
+    config = SpeedProfileConfig(v_max=9.0, horizon_stop=False, **LIMITS)
     s = np.arange(0.0, 40.0, 0.5)
     v = speed_profile(np.column_stack([s, np.zeros_like(s)]), config, v_start=0.0)
     assert_allclose(v, np.minimum(np.sqrt(2 * 3.0 * s), 9.0), rtol=1e-12)
@@ -47,7 +65,9 @@ def test_straight_from_standstill_and_the_cap() -> None:
 def test_horizon_stop_brakes_to_zero_at_the_end() -> None:
     """With horizon_stop: v = sqrt(2 a_brake (L - s)) near the end; 6 m/s^2, 3 m left: 6 m/s."""
     s = np.arange(0.0, 30.5, 0.5)
-    v = speed_profile(np.column_stack([s, np.zeros_like(s)]), SpeedProfileConfig())
+    v = speed_profile(
+        np.column_stack([s, np.zeros_like(s)]), SpeedProfileConfig(v_max=15.0, **LIMITS)
+    )
     assert v[-1] == 0.0
     assert v[-7] == pytest.approx(6.0)
     tail = s > 30.0 - 15.0**2 / (2 * 6.0)  # where braking from v_max = 15 m/s binds
@@ -97,14 +117,93 @@ def test_curvature_window_averages_wiggles_but_keeps_a_circle() -> None:
     Alternating curvature +-k over 7 samples averages to k / 7, so the
     curvature limit rises from sqrt(6 / k) to sqrt(6 * 7 / k).
     """
-    cfg = SpeedProfileConfig(horizon_stop=False, curvature_window=3.0)
+    cfg = SpeedProfileConfig(horizon_stop=False, curvature_window=3.0, **LIMITS)
     v = speed_profile(arc(10.0, 60.0), cfg)
     assert_allclose(v[4:-4], math.sqrt(6.0 * 10.0), rtol=1e-6)
     x = np.arange(0.0, 30.0, 0.5)
     zigzag = np.column_stack([x, 0.02 * (-1.0) ** np.arange(len(x))])
-    free = {"a_drive": 1000.0, "a_brake": 1000.0, "horizon_stop": False}
+    free = {**LIMITS, "a_drive": 1000.0, "a_brake": 1000.0, "horizon_stop": False}
     point_by_point = speed_profile(zigzag, SpeedProfileConfig(curvature_window=0.0, **free))
     windowed = speed_profile(zigzag, SpeedProfileConfig(curvature_window=3.2, **free))
     k = abs(menger_curvature(zigzag)[10])
     assert_allclose(point_by_point[2:-2], math.sqrt(6.0 / k), rtol=1e-9)
     assert_allclose(windowed[8:-8], math.sqrt(6.0 * 7 / k), rtol=1e-9)
+
+
+def test_friction_ellipse_on_a_circle_from_rest() -> None:
+    """On R = 10 m (V^2 = a_lat R = 60), dv^2/ds = 2 a_d sqrt(1 - (v^2 / V^2)^2) from rest.
+
+    So arcsin(v^2 / V^2) = 2 a_d s / V^2: at s = 5 m, v^2 = 60 sin(0.5) = 28.77,
+    v = 5.363 m/s (a straight line gives sqrt(30) = 5.477); V is reached at
+    s = pi V^2 / (4 a_d) = 15.71 m. Fine steps: Euler error < 0.5 %.
+    """
+    s = np.arange(0.0, 30.0, 0.01)
+    kappa = np.full_like(s, 0.1)
+    limit = np.full_like(s, math.sqrt(60.0))
+    limit[0] = 0.0
+    v = ellipse_forward_pass(s, limit, kappa, 3.0, a_lat_max=6.0)
+    assert v[500] == pytest.approx(math.sqrt(60.0 * math.sin(0.5)), rel=5e-3)
+    assert v[1500] < math.sqrt(60.0) < v[1600] + 1e-9
+
+
+def test_friction_ellipse_brakes_less_in_the_corner() -> None:
+    """Braking to 5 m/s at the end of R = 10 m: the ellipse leaves less than a_brake.
+
+    Backwards from v^2 = 25 at the end: dv^2/ds = 2 a_b sqrt(1 - (v^2 / 60)^2),
+    so arcsin(v^2 / 60) grows by 2 a_b ds / 60 = 0.2 rad per metre with a_b = 6:
+    1 m back v^2 = 60 sin(arcsin(25 / 60) + 0.2) = 35.87 (without: 37).
+    On a straight (kappa = 0) the loops equal the closed-form passes.
+    """
+    s = np.arange(0.0, 10.001, 0.001)
+    limit = np.full_like(s, math.sqrt(60.0))
+    limit[-1] = 5.0
+    v = ellipse_backward_pass(s, limit, np.full_like(s, 0.1), 6.0, a_lat_max=6.0)
+    expected = 60.0 * math.sin(math.asin(25.0 / 60.0) + 0.2)
+    assert v[-1001] ** 2 == pytest.approx(expected, rel=1e-3)
+    rng = np.random.default_rng(0)
+    s = np.cumsum(rng.uniform(0.1, 1.0, 100))
+    lim = rng.uniform(1.0, 20.0, 100)
+    zero = np.zeros(100)
+    assert_allclose(
+        ellipse_forward_pass(s, lim, zero, 3.0, a_lat_max=6.0), forward_pass(s, lim, 3.0)
+    )
+    assert_allclose(
+        ellipse_backward_pass(s, lim, zero, 6.0, a_lat_max=6.0), backward_pass(s, lim, 6.0)
+    )
+
+
+def test_speed_profile_uses_the_ellipse_when_asked() -> None:
+    """From rest on R = 10 m: 5.36 m/s at 5 m with the ellipse, sqrt(30) = 5.48 without."""
+    pts = arc(10.0, 12.0, step=0.05)
+    cfg = SpeedProfileConfig(v_max=100.0, horizon_stop=False, curvature_window=0.0, **LIMITS)
+    plain = speed_profile(pts, cfg, v_start=0.0)
+    ellipse = speed_profile(pts, dataclasses.replace(cfg, friction_ellipse=True), v_start=0.0)
+    assert plain[100] == pytest.approx(math.sqrt(2 * 3.0 * 5.0), rel=1e-3)
+    assert ellipse[100] == pytest.approx(math.sqrt(60.0 * math.sin(0.5)), rel=5e-3)
+
+
+def test_downforce_raises_the_corner_speed() -> None:
+    """v^2 |kappa| = a_lat_max + a_lat_aero v^2: R = 20 m, 6 m/s^2, 0.01 1/m gives
+    v = sqrt(6 / (0.05 - 0.01)) = 12.247 m/s (a_lat 7.5 = 6 + 0.01 * 150); where
+    |kappa| <= a_lat_aero + a_lat_max / v_max^2 = 0.0167 1/m (R >= 60 m), v_max."""
+    cfg = SpeedProfileConfig(a_lat_max=6.0, a_lat_aero=0.01, v_max=30.0)
+    v = curvature_limit(np.array([0.05, -0.05, 0.01, 0.0]), cfg)
+    assert_allclose(v[:2], math.sqrt(150.0), rtol=1e-12)
+    assert_allclose(v[2:], 30.0)
+    assert v[0] ** 2 * 0.05 == pytest.approx(6.0 + 0.01 * v[0] ** 2)
+
+
+def test_jerk_limit_on_a_curvature_ramp() -> None:
+    """Curvature rising 0.01 1/m per metre: v <= (60 / 0.01)^(1/3) = 18.17 m/s.
+
+    Samples 0.5 m apart, the slope over a 4 m window (8 steps); flat curvature:
+    no limit. With J = inf there is none at all.
+    """
+    kappa = np.concatenate([np.zeros(20), 0.005 * np.arange(1, 21), np.full(20, 0.1)])
+    cfg = SpeedProfileConfig(lateral_jerk_max=60.0, jerk_window=4.0)
+    v = jerk_limit(kappa, 0.5, cfg)
+    assert v is not None
+    assert_allclose(v[28:32], (60.0 / 0.01) ** (1 / 3), rtol=1e-9)
+    assert v[28] == pytest.approx(18.17, abs=0.01)
+    assert np.all(np.isinf(v[:15])) and np.all(np.isinf(v[-15:]))
+    assert jerk_limit(kappa, 0.5, SpeedProfileConfig(lateral_jerk_max=math.inf)) is None
