@@ -155,8 +155,11 @@ def limit_lap_time(
         v = qss_speed_profile(s, kappa, closed, p)
         ds = np.full(len(s), s[1] - s[0])
         return float(np.sum(2.0 * ds / np.maximum(v + np.roll(v, -1), 1e-6)))
-    keep = s >= start_s - 1e-9
-    s, kappa = s[keep], kappa[keep]
+    # From rest exactly at start_s: the grid's first station at or after it
+    # would start the run up to STEP_M late (a 4 mm late start read 1 ms slow).
+    keep = s > start_s + 1e-9
+    kappa = np.concatenate([[np.interp(start_s, s, kappa)], kappa[keep]])
+    s = np.concatenate([[start_s], s[keep]])
     v = qss_speed_profile(s, kappa, closed, p, v_start=0.0)
     t = np.concatenate([[0.0], np.cumsum(2.0 * np.diff(s) / np.maximum(v[:-1] + v[1:], 1e-6))])
     t0 = float(np.interp(start_s if timed_from_s is None else timed_from_s, s, t))

@@ -340,7 +340,7 @@ class SpeedControlConfig(Settings):
             load (drag, tyre scrub in a corner), not the large errors of a
             target that jumps, which would wind it up and make the car
             overshoot the next target.
-        max_accel: largest acceleration command [m/s^2] (EUFS +3, less 0.3 %).
+        max_accel: largest acceleration command [m/s^2] (EUFS +3).
         max_decel: largest deceleration command [m/s^2], > 0 (EUFS -10).
         lateral_grip: the tyres' lateral grip G at rest [m/s^2] for the
             friction ellipse of the command
@@ -358,11 +358,7 @@ class SpeedControlConfig(Settings):
     feed_forward: float = 1.0  # [-]
     integral_limit: float = 4.0  # [m]
     integral_band: float = 1.0  # [m/s]
-    # 0.3 % below the car's +3 (EUFS): at full throttle the car ties the limit
-    # lap on the acceleration lane (6.01003 s, what 3 m/s^2 from the start
-    # gives), which reads 1 ms more (6.01110 s) from its 0.25 m grid, and the
-    # lap-time checks ask for a lap above the limit.
-    max_accel: float = 2.99  # [m/s^2]
+    max_accel: float = 3.0  # [m/s^2] EUFS
     max_decel: float = 10.0  # [m/s^2] EUFS
     # The speed profile's own limits (a_lat_max, a_lat_aero), not the tyre's
     # full 15.7 + 0.016 v^2: braking within the tyre's ellipse, the car spun

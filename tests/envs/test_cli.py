@@ -152,7 +152,8 @@ def test_run_json_on_acceleration(tmp_path: Path, capsys: pytest.CaptureFixture[
     }  # fmt: skip
     assert required <= set(result)
     assert result["laps_completed"] == 1 and result["cones_down_or_out"] == 0
-    assert result["lap_times_s"][0] >= result["limit_lap_time_s"]
+    # A car at full throttle ties the limit; the QSS is exact to 1e-4 (its grid).
+    assert result["lap_times_s"][0] >= result["limit_lap_time_s"] * (1 - 1e-4)
     assert math.isfinite(result["real_time_factor"])
 
 
