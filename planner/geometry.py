@@ -46,6 +46,7 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from localization.global_path import GlobalPath
+from planner import kernels
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -86,18 +87,17 @@ class Projection:
 
 
 class _Candidates(NamedTuple):
-    """Candidate segments (n, k) of n points, with the foot parameter and squared distance.
+    """Candidate segments (n, k) of n points.
 
     ``dist`` is the distance to each candidate's midpoint (None when every
-    segment is a candidate), ``segment`` the candidates' indices and ``rows``
-    their rows (n, k, 9) of the segment table.
+    segment is a candidate), ``segment`` the candidates' indices.
     """
 
     dist: FloatArray | None
     segment: IntArray
-    rows: FloatArray
-    t: FloatArray
-    d2: FloatArray
+
+
+_NO_DIST = np.zeros((0, 0))  # ``kernels.pick_segments``' distances when there are none
 
 
 # Columns of the segment table: start x, y, direction x, y, 1 / length^2,
@@ -169,7 +169,7 @@ class PathProjector:
                 comparing [m]: inf searches the window only (the whole path
                 if no segment is in it), 0 ignores the window.
         """
-        p = np.asarray(points, dtype=float).reshape(-1, 2)
+        p = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
         return self._project(p, self._candidates(p), self._preference(window, penalty))
 
     def project_around(
@@ -194,7 +194,7 @@ class PathProjector:
             penalty: see :meth:`project`.
             centre: the window's origin station [m], if known.
         """
-        p = np.asarray(points, dtype=float).reshape(-1, 2)
+        p = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
         found = self._candidates(p)
         prefer = None
         if penalty > 0.0:
@@ -237,18 +237,8 @@ class PathProjector:
     ) -> Projection:
         """The projections of ``p`` given its first-pass candidates."""
         seg, t, d2 = self._nearest(p, found, prefer)
-        row = self._table.take(seg, axis=0)
-        a, d, length = row[:, _SX : _SY + 1], row[:, _DX : _DY + 1], row[:, _LENGTH]
-        rel = p - a
-        cross = d[:, 0] * rel[:, 1] - d[:, 1] * rel[:, 0]
-        return Projection(
-            foot=a + t[:, None] * d,
-            segment=seg,
-            station=row[:, _STATION0] + t * length,
-            offset=cross / length,
-            tangent=d / length[:, None],
-            distance=np.sqrt(d2),
-        )
+        foot, station, offset, tangent, distance = kernels.project_rows(p, seg, t, d2, self._table)
+        return Projection(foot, seg, station, offset, tangent, distance)
 
     def _candidates(self, p: FloatArray, wanted: int = _CANDIDATES[0]) -> _Candidates:
         """The segments of the ``wanted`` nearest midpoints of each point (k-d tree)."""
@@ -257,22 +247,49 @@ class PathProjector:
         index = np.asarray(index, dtype=np.intp).reshape(len(p), k)
         dist = np.asarray(dist, dtype=float).reshape(len(p), k)
         if k == len(self._length):
-            dist = None  # every segment is a candidate: the result is sure
-        return self._measure(p, dist, index, self._table.take(index, axis=0))
+            return _Candidates(None, index)  # every segment is a candidate: the result is sure
+        return _Candidates(dist, index)
 
-    @staticmethod
-    def _measure(
-        p: FloatArray, dist: FloatArray | None, index: IntArray, rows: FloatArray
-    ) -> _Candidates:
-        """Foot parameter and squared distance of each point to its candidate segments."""
-        rx = p[:, 0, None] - rows[..., _SX]
-        ry = p[:, 1, None] - rows[..., _SY]
-        dx, dy = rows[..., _DX], rows[..., _DY]
-        t = (rx * dx + ry * dy) * rows[..., _INV_LEN2]
-        np.maximum(t, 0.0, out=t)  # clip to [0, 1]
-        np.minimum(t, 1.0, out=t)
-        gx, gy = rx - t * dx, ry - t * dy
-        return _Candidates(dist, index, rows, t, gx * gx + gy * gy)
+    def _pick(
+        self,
+        p: FloatArray,
+        found: _Candidates,
+        prefer: tuple[float, float, float] | None,
+    ) -> tuple[IntArray, FloatArray, FloatArray, NDArray[np.bool_] | None]:
+        """The best candidate of each point: segment, t, squared distance, and whether unsure.
+
+        The candidates' foot parameter and squared distance, plus the penalty
+        of those outside the preferred window (``prefer``: centre, half width,
+        penalty [m]; None for no window), least of each row (compiled:
+        ``kernels.pick_segments``). The unsure mask is None when every
+        segment was a candidate.
+        """
+        has_dist = found.dist is not None
+        centre, half, penalty = (0.0, 0.0, 0.0) if prefer is None else prefer
+        seg, t, d2, unsure = kernels.pick_segments(
+            p,
+            found.segment,
+            found.dist if found.dist is not None else _NO_DIST,
+            self._table,
+            has_dist,
+            prefer is not None,
+            centre,
+            half,
+            penalty,
+            self.length,
+            self.closed,
+            self._half_max,
+        )
+        return seg, t, d2, unsure if has_dist else None
+
+    def _last_station(self, p: FloatArray, found: _Candidates) -> float:
+        """Station [m] of the last point's nearest segment on the whole path (no window)."""
+        last = _Candidates(None if found.dist is None else found.dist[-1:], found.segment[-1:])
+        seg, t, _, unsure = self._pick(p[-1:], last, None)
+        if unsure is not None and unsure[0]:
+            return float(self.project(p[-1:]).station[0])  # unsure: the full search
+        row = self._table[seg[0]]
+        return float(row[_STATION0] + t[0] * row[_LENGTH])
 
     def _nearest(
         self, p: FloatArray, found: _Candidates, prefer: tuple[float, float, float] | None
@@ -289,50 +306,19 @@ class PathProjector:
         docstring). Unsure points are tried again with a larger k, then
         against every segment.
         """
-        seg, t, d2, unsure = self._pick(found, prefer)
+        seg, t, d2, unsure = self._pick(p, found, prefer)
         todo = unsure.nonzero()[0] if unsure is not None else None
         for wanted in _CANDIDATES[1:]:
             if todo is None or len(todo) == 0:
                 return seg, t, d2
             found = self._candidates(p[todo], wanted)
-            seg[todo], t[todo], d2[todo], unsure = self._pick(found, prefer)
+            seg[todo], t[todo], d2[todo], unsure = self._pick(p[todo], found, prefer)
             todo = todo[unsure] if unsure is not None else None
         if todo is not None and len(todo):
             n_seg = len(self._length)
-            every = np.broadcast_to(np.arange(n_seg), (len(todo), n_seg))
-            rows = np.broadcast_to(self._table, (len(todo), *self._table.shape))
-            found = self._measure(p[todo], None, every, rows)
-            seg[todo], t[todo], d2[todo], _ = self._pick(found, prefer)
+            every = np.ascontiguousarray(np.broadcast_to(np.arange(n_seg), (len(todo), n_seg)))
+            seg[todo], t[todo], d2[todo], _ = self._pick(p[todo], _Candidates(None, every), prefer)
         return seg, t, d2
-
-    def _pick(
-        self, found: _Candidates, prefer: tuple[float, float, float] | None
-    ) -> tuple[IntArray, FloatArray, FloatArray, NDArray[np.bool_] | None]:
-        """The best candidate of each point: segment, t, squared distance, and whether unsure.
-
-        The unsure mask is None when every segment was a candidate.
-        """
-        cost = self._penalty(found.rows, prefer)
-        d2 = found.d2
-        n, k = d2.shape
-        best = (d2 if cost is None else np.sqrt(d2) + cost).argmin(axis=1)
-        best += np.arange(0, n * k, k)  # flat index of (row, best)
-        unsure = None
-        if found.dist is not None:
-            dist = found.dist
-            first = dist[:, 0] if cost is None else (dist + cost).min(axis=1)
-            unsure = dist[:, -1] <= first + self._half_max
-        return found.segment.take(best), found.t.take(best), d2.take(best), unsure
-
-    def _penalty(
-        self, rows: FloatArray, prefer: tuple[float, float, float] | None
-    ) -> FloatArray | None:
-        """(n, k) penalty of candidate segments outside the preferred window [m]."""
-        if prefer is None:
-            return None
-        centre, half, penalty = prefer
-        away = np.abs(self._axis.difference(rows[..., _MID_STATION], centre))
-        return np.where(away <= half + rows[..., _HALF_LENGTH], 0.0, penalty)
 
 
 @dataclass(frozen=True, slots=True)
@@ -395,31 +381,21 @@ def segments_cross(
 def polyline_crosses(points: FloatArray, b0: FloatArray, b1: FloatArray) -> bool:
     """Whether the polyline (p, 2) properly crosses any segment ``b0 b1`` (k, 2).
 
-    ``np.any(segments_cross(points[:-1], points[1:], b0, b1))``, computed in two
-    steps for speed: first the side of every polyline point of every
-    segment's line (one (p, k) matrix, built in place, consecutive points in
-    consecutive rows), which leaves the few polyline segments that straddle a
-    line (found with one flat ``nonzero``); only those are tested against the
-    line through the other segment.
+    ``np.any(segments_cross(points[:-1], points[1:], b0, b1))``, compiled
+    (``kernels.polyline_crosses``): for each segment's line, the side of each
+    polyline point; only a polyline step that straddles the line is tested
+    against the line through the other segment, and the first crossing ends
+    the search.
     """
     if len(points) < 2 or len(b0) == 0:
         return False
-    db = b1 - b0
-    cb = db[:, 0] * b0[:, 1] - db[:, 1] * b0[:, 0]
-    side = np.multiply.outer(points[:, 1], db[:, 0])  # (p, k): _orientation transposed
-    side -= np.multiply.outer(points[:, 0], db[:, 1])
-    side -= cb
-    hits = np.flatnonzero(side[:-1] * side[1:] < 0.0)
-    if len(hits) == 0:
-        return False
-    j, k = np.divmod(hits, len(cb))
-    a0, a1 = points.take(j, axis=0), points.take(j + 1, axis=0)
-    da = a1 - a0
-    ca = da[:, 0] * a0[:, 1] - da[:, 1] * a0[:, 0]
-    e0, e1 = b0.take(k, axis=0), b1.take(k, axis=0)
-    o0 = da[:, 0] * e0[:, 1] - da[:, 1] * e0[:, 0] - ca
-    o1 = da[:, 0] * e1[:, 1] - da[:, 1] * e1[:, 0] - ca
-    return bool((o0 * o1 < 0.0).any())
+    return bool(
+        kernels.polyline_crosses(
+            np.ascontiguousarray(points, dtype=float),
+            np.ascontiguousarray(b0, dtype=float),
+            np.ascontiguousarray(b1, dtype=float),
+        )
+    )
 
 
 def arc_length(points: FloatArray) -> FloatArray:

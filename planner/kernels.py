@@ -1,0 +1,576 @@
+"""Compiled kernels (numba) for the planner's per-detection glue.
+
+Why hand-written compiled code exists here: the planning step (classify +
+plan + speed profile, issue 5: median <= 0.5 ms with 80 cones in view) runs
+on a few dozen cones, where numpy's cost is per call, not per element. With
+the numpy glue already tuned, the step measured 0.96-1.03 ms at 80 cones;
+a perf profile gave the Python interpreter 34 %, numpy's per-call overhead
+23 %, arithmetic 7.6 %, qhull 16 %, malloc 9 %, the k-d tree 3 %. Each
+kernel below replaces a chain of small numpy calls (masks, outer products,
+gathers, argmins, a Python walk) with one loop over the elements, compiled
+once (``cache=True``: later processes load the machine code from the cache
+next to this file, or from ``NUMBA_CACHE_DIR``).
+
+Every kernel does the same IEEE operations per element, in the same order,
+as the numpy code it replaces (no ``fastmath``, so no reassociation or
+fused multiply-add): the results are bit for bit the same, including which
+element wins a tie (first in the order numpy's ``argmin`` or stable
+``argsort`` would see). ``tests/planner/test_speedups.py`` keeps the numpy
+formulations as references and compares exactly.
+
+The kernels are called through typed Python wrappers in ``geometry``,
+``bridges``, ``ordering`` and ``midline``; they take plain arrays and
+scalars (no dataclasses) and are untyped for mypy (``numba`` has no stubs).
+Integer index arrays are ``intp``, sides ``int8``, flags ``bool``, all
+C-contiguous, so each kernel compiles to one specialisation.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+# Columns of ``PathProjector``'s segment table (``geometry``).
+_SX, _SY, _DX, _DY, _INV_LEN2, _MID_STATION, _HALF_LENGTH, _LENGTH, _STATION0 = range(9)
+
+
+@njit(cache=True)
+def _wrap(diff, length, closed):  # type: ignore[no-untyped-def]
+    """``station_difference``'s wrap of one difference (Python's float ``%``)."""
+    if closed and length > 0.0:
+        return (diff + 0.5 * length) % length - 0.5 * length
+    return diff
+
+
+@njit(cache=True)
+def pick_segments(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+    p, index, dist, table, has_dist, windowed, centre, half, penalty, length, closed, half_max
+):
+    """Each point's best candidate segment: (segment, t, squared distance, unsure).
+
+    ``PathProjector._measure`` + ``_penalty`` + ``_pick`` on candidates
+    ``index`` (n, k) with midpoint distances ``dist`` (used when ``has_dist``).
+    Without a window the score is the squared distance, with one the
+    distance plus the penalty of segments outside [centre - half, centre +
+    half] (widened by each segment's half length). Ties go to the first
+    candidate (``argmin``); a NaN score wins (``argmin`` returns the first NaN).
+    """
+    n, k = index.shape
+    seg = np.empty(n, np.intp)
+    t_best = np.empty(n)
+    d2_best = np.empty(n)
+    unsure = np.zeros(n, np.bool_)
+    for i in range(n):
+        px = p[i, 0]
+        py = p[i, 1]
+        best = -1
+        best_score = 0.0
+        first = math.inf
+        for c in range(k):
+            s = index[i, c]
+            rx = px - table[s, _SX]
+            ry = py - table[s, _SY]
+            dx = table[s, _DX]
+            dy = table[s, _DY]
+            t = (rx * dx + ry * dy) * table[s, _INV_LEN2]
+            if t < 0.0:  # noqa: PLR1730 (np.maximum(t, 0.0): NaN stays NaN)
+                t = 0.0
+            if t > 1.0:  # noqa: PLR1730 (np.minimum(t, 1.0))
+                t = 1.0
+            gx = rx - t * dx
+            gy = ry - t * dy
+            d2 = gx * gx + gy * gy
+            if windowed:
+                away = abs(_wrap(table[s, _MID_STATION] - centre, length, closed))
+                cost = 0.0 if away <= half + table[s, _HALF_LENGTH] else penalty
+                score = math.sqrt(d2) + cost
+                if has_dist:
+                    first = min(first, dist[i, c] + cost)
+            else:
+                score = d2
+            if best < 0 or score < best_score or (math.isnan(score) and not math.isnan(best_score)):
+                best = c
+                best_score = score
+                seg[i] = s
+                t_best[i] = t
+                d2_best[i] = d2
+        if has_dist:
+            if not windowed:
+                first = dist[i, 0]
+            unsure[i] = dist[i, k - 1] <= first + half_max
+    return seg, t_best, d2_best, unsure
+
+
+@njit(cache=True)
+def project_rows(p, seg, t, d2, table):  # type: ignore[no-untyped-def]
+    """``PathProjector._project``'s outputs: foot, station, offset, tangent, distance."""
+    n = len(seg)
+    foot = np.empty((n, 2))
+    station = np.empty(n)
+    offset = np.empty(n)
+    tangent = np.empty((n, 2))
+    distance = np.empty(n)
+    for i in range(n):
+        s = seg[i]
+        ax = table[s, _SX]
+        ay = table[s, _SY]
+        dx = table[s, _DX]
+        dy = table[s, _DY]
+        length = table[s, _LENGTH]
+        ti = t[i]
+        foot[i, 0] = ax + ti * dx
+        foot[i, 1] = ay + ti * dy
+        station[i] = table[s, _STATION0] + ti * length
+        offset[i] = (dx * (p[i, 1] - ay) - dy * (p[i, 0] - ax)) / length
+        tangent[i, 0] = dx / length
+        tangent[i, 1] = dy / length
+        distance[i] = math.sqrt(d2[i])
+    return foot, station, offset, tangent, distance
+
+
+@njit(cache=True)
+def in_view(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+    points, offset, min_x, max_range, min_offset, max_offset
+):
+    """``midline.in_view``: (n,) mask of cones in range and at a boundary's offset."""
+    n = len(offset)
+    keep = np.empty(n, np.bool_)
+    for i in range(n):
+        x = points[i, 0]
+        y = points[i, 1]
+        o = abs(offset[i])
+        keep[i] = x >= min_x and np.hypot(x, y) <= max_range and o >= min_offset and o <= max_offset
+    return keep
+
+
+@njit(cache=True)
+def pair_table(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+    points, side, offset, station, length, closed, max_gap
+):
+    """``bridges.pair_table``: left, right, dist, same_stretch, span, middle."""
+    n = len(side)
+    a = 0
+    for i in range(n):
+        if side[i] > 0:
+            a += 1
+    b = 0
+    for i in range(n):
+        if side[i] < 0:
+            b += 1
+    left = np.empty(a, np.intp)
+    right = np.empty(b, np.intp)
+    a = 0
+    b = 0
+    for i in range(n):
+        if side[i] > 0:
+            left[a] = i
+            a += 1
+    for i in range(n):
+        if side[i] < 0:
+            right[b] = i
+            b += 1
+    dist = np.empty((a, b))
+    same = np.empty((a, b), np.bool_)
+    span = np.empty((a, b))
+    middle = np.empty((a, b))
+    for r in range(a):
+        li = left[r]
+        for c in range(b):
+            ri = right[c]
+            dist[r, c] = np.hypot(points[li, 0] - points[ri, 0], points[li, 1] - points[ri, 1])
+            same[r, c] = abs(_wrap(station[ri] - station[li], length, closed)) <= max_gap
+            span[r, c] = offset[li] - offset[ri]
+            middle[r, c] = 0.5 * (offset[li] + offset[ri])
+    return left, right, dist, same, span, middle
+
+
+@njit(cache=True)
+def median(values):  # type: ignore[no-untyped-def]
+    """``bridges.median``: middle value or ``(a + b) / 2`` of the sorted values; NaN if any."""
+    ordered = np.sort(values)
+    n = len(ordered)
+    half = n // 2
+    if math.isnan(ordered[n - 1]):
+        return math.nan
+    if n % 2:
+        return ordered[half]
+    return (ordered[half - 1] + ordered[half]) / 2.0
+
+
+@njit(cache=True)
+def estimate_track(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+    dist, same, span, middle, min_width, max_width, max_length, min_samples
+):
+    """``bridges.estimate_track``: (width, centre, measured); measured False gives (0, 0)."""
+    a, b = dist.shape
+    valid = np.empty((a, b), np.bool_)
+    for r in range(a):
+        for c in range(b):
+            valid[r, c] = (
+                same[r, c]
+                and span[r, c] >= min_width
+                and span[r, c] <= max_width
+                and dist[r, c] <= max_length
+            )
+    # Each row's nearest valid partner (first of equals), then each column's.
+    picks_r = np.empty(a + b, np.intp)
+    picks_c = np.empty(a + b, np.intp)
+    rows = 0
+    for r in range(a):
+        best = -1
+        for c in range(b):
+            if valid[r, c] and (best < 0 or dist[r, c] < dist[r, best]):
+                best = c
+        if best >= 0:
+            picks_r[rows] = r
+            picks_c[rows] = best
+            rows += 1
+    m = rows
+    for c in range(b):
+        best = -1
+        for r in range(a):
+            if valid[r, c] and (best < 0 or dist[r, c] < dist[best, c]):
+                best = r
+        if best >= 0:
+            picks_r[m] = best
+            picks_c[m] = c
+            m += 1
+    if rows == 0 or m < min_samples:
+        return 0.0, 0.0, False
+    widths = np.empty(m)
+    centres = np.empty(m)
+    for q in range(m):
+        widths[q] = span[picks_r[q], picks_c[q]]
+        centres[q] = middle[picks_r[q], picks_c[q]]
+    return median(widths), median(centres), True
+
+
+@njit(cache=True)
+def boundary_offset(side, offset, centre, width):  # type: ignore[no-untyped-def]
+    """``TrackEstimate.boundary_offset``: ``side * (offset - centre) - width / 2``."""
+    n = len(side)
+    out = np.empty(n)
+    half = 0.5 * width
+    for i in range(n):
+        out[i] = side[i] * (offset[i] - centre) - half
+    return out
+
+
+@njit(cache=True)
+def _rows(mask):  # type: ignore[no-untyped-def]
+    """``mask.nonzero()[0]``."""
+    out = np.empty(len(mask), np.intp)
+    m = 0
+    for i in range(len(mask)):
+        if mask[i]:
+            out[m] = i
+            m += 1
+    return out[:m]
+
+
+@njit(cache=True)
+def boundary_cones(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+    points,
+    side,
+    offset,
+    station,
+    length,
+    closed,
+    min_x,
+    max_range,
+    min_offset,
+    max_offset,
+    max_gap,
+    min_width,
+    max_width,
+    max_bridge,
+    min_samples,
+    tolerance,
+):
+    """``midline.boundary_cones``: kept rows, the pair table, (width, centre, measured).
+
+    The cones in view; their pair table and the track estimate; when
+    measured, the cones more than ``tolerance`` inside their boundary line
+    dropped and the pair table rebuilt. The width and centre are 0 when not
+    measured (the caller puts in the nominal track).
+    """
+    keep = _rows(in_view(points, offset, min_x, max_range, min_offset, max_offset))
+    pts = points[keep]
+    sd = side[keep]
+    off = offset[keep]
+    st = station[keep]
+    left, right, dist, same, span, middle = pair_table(pts, sd, off, st, length, closed, max_gap)
+    width, centre, measured = estimate_track(
+        dist, same, span, middle, min_width, max_width, max_bridge, min_samples
+    )
+    if measured:
+        outside = boundary_offset(sd, off, centre, width)
+        on = outside >= -tolerance
+        if not on.all():
+            inner = _rows(on)
+            keep = keep[inner]
+            left, right, dist, same, span, middle = pair_table(
+                pts[inner], sd[inner], off[inner], st[inner], length, closed, max_gap
+            )
+    return keep, left, right, dist, same, span, middle, width, centre, measured
+
+
+@njit(cache=True)
+def partners_needed(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+    side, offset, left, right, same, dist, radius, centre, width, tolerance
+):
+    """``virtual_partners``' selection: rows of the cones that get a virtual partner."""
+    n = len(side)
+    near = np.zeros(n, np.bool_)
+    a, b = dist.shape
+    for r in range(a):
+        for c in range(b):
+            if same[r, c] and dist[r, c] <= radius:
+                near[left[r]] = True
+                near[right[c]] = True
+    outside = boundary_offset(side, offset, centre, width)
+    need = np.empty(n, np.bool_)
+    for i in range(n):
+        need[i] = not near[i] and abs(outside[i]) <= tolerance
+    return _rows(need)
+
+
+@njit(cache=True)
+def delaunay_edges(simplices, n):  # type: ignore[no-untyped-def]
+    """Unique edges (e, 2), i < j, in the order of ``Delaunay.vertex_neighbor_vertices``.
+
+    scipy builds each vertex's neighbour list by walking the simplices and
+    their vertex pairs (j, k), appending k to j's list when not yet in it
+    (``setlist.add``); the CSR rows are these lists. Rows in vertex order,
+    each keeping its neighbours above the vertex, give the edges.
+    """
+    count = np.zeros(n, np.intp)
+    cap = 16  # a Delaunay vertex has 6 neighbours on average
+    lists = np.empty((n, cap), np.intp)
+    for i in range(simplices.shape[0]):
+        for j in range(3):
+            u = simplices[i, j]
+            for k in range(3):
+                v = simplices[i, k]
+                if u == v:
+                    continue
+                found = False
+                for q in range(count[u]):
+                    if lists[u, q] == v:
+                        found = True
+                        break
+                if not found:
+                    if count[u] == cap:  # grow (a vertex with many neighbours)
+                        cap *= 2
+                        bigger = np.empty((n, cap), np.intp)
+                        bigger[:, : lists.shape[1]] = lists
+                        lists = bigger
+                    lists[u, count[u]] = v
+                    count[u] += 1
+    e = 0
+    for u in range(n):
+        for q in range(count[u]):
+            if u < lists[u, q]:
+                e += 1
+    edges = np.empty((e, 2), np.intp)
+    e = 0
+    for u in range(n):
+        for q in range(count[u]):
+            v = lists[u, q]
+            if u < v:
+                edges[e, 0] = u
+                edges[e, 1] = v
+                e += 1
+    return edges
+
+
+@njit(cache=True)
+def find_bridges(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+    edges,
+    points,
+    side,
+    offset,
+    station,
+    virtual,
+    length,
+    closed,
+    min_width,
+    max_width,
+    max_bridge,
+    max_gap,
+    check_width,
+    width,
+    width_tolerance,
+    shortest,
+):
+    """``bridges.find_bridges``: left, right, length, valid, used, midpoints, station."""
+    e = edges.shape[0]
+    m = 0
+    for q in range(e):
+        if side[edges[q, 0]] != side[edges[q, 1]]:
+            m += 1
+    left = np.empty(m, np.intp)
+    right = np.empty(m, np.intp)
+    size = np.empty(m)
+    valid = np.empty(m, np.bool_)
+    mid = np.empty((m, 2))
+    mid_station = np.empty(m)
+    m = 0
+    for q in range(e):
+        i = edges[q, 0]
+        j = edges[q, 1]
+        if side[i] == side[j]:
+            continue
+        if side[i] < 0:
+            i, j = j, i
+        left[m] = i
+        right[m] = j
+        vx = points[j, 0] - points[i, 0]
+        vy = points[j, 1] - points[i, 1]
+        size[m] = np.hypot(vx, vy)
+        span = offset[i] - offset[j]
+        ds = _wrap(station[j] - station[i], length, closed)
+        ok = (
+            span >= min_width
+            and span <= max_width
+            and size[m] <= max_bridge
+            and abs(ds) <= max_gap
+            and not (virtual[i] and virtual[j])
+        )
+        if check_width:
+            ok = ok and abs(span - width) <= width_tolerance
+        valid[m] = ok
+        mid[m, 0] = points[i, 0] + 0.5 * vx
+        mid[m, 1] = points[i, 1] + 0.5 * vy
+        mid_station[m] = station[i] + 0.5 * ds
+        m += 1
+    used = valid.copy()
+    if shortest and valid.any():
+        best = np.full(len(side), math.inf)
+        for q in range(m):
+            if valid[q]:
+                best[left[q]] = min(best[left[q]], size[q])
+                best[right[q]] = min(best[right[q]], size[q])
+        for q in range(m):
+            used[q] = valid[q] and (size[q] <= best[left[q]] or size[q] <= best[right[q]])
+    return left, right, size, valid, used, mid, mid_station
+
+
+@njit(cache=True)
+def boundary_edges(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+    edges, side, offset, station, length, closed, min_width, max_gap
+):
+    """``bridges.boundary_edges``: rows of the same-side edges along one boundary."""
+    e = edges.shape[0]
+    along = np.zeros(e, np.bool_)
+    for q in range(e):
+        i = edges[q, 0]
+        j = edges[q, 1]
+        if side[i] == side[j]:
+            along[q] = (
+                abs(offset[i] - offset[j]) < min_width
+                and abs(_wrap(station[j] - station[i], length, closed)) <= max_gap
+            )
+    return _rows(along)
+
+
+@njit(cache=True)
+def start_index(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+    midpoints, station, sensor_station, length, closed, start_min_x, start_back, start_ahead
+):
+    """``ordering.start_index``: the nearest midpoint in front (first of equals), or -1."""
+    first = -1
+    best = math.inf
+    for i in range(len(station)):
+        ahead = _wrap(station[i] - sensor_station, length, closed)
+        x = midpoints[i, 0]
+        if x > start_min_x and ahead >= -start_back and ahead <= start_ahead:
+            h = np.hypot(x, midpoints[i, 1])
+            if first < 0 or h < best or (math.isnan(h) and not math.isnan(best)):
+                first = i
+                best = h
+    return first
+
+
+@njit(cache=True)
+def chain_nearest(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+    midpoints,
+    station,
+    first,
+    length,
+    closed,
+    max_step,
+    max_station_step,
+    back_tolerance,
+    min_advance,
+    min_spacing,
+):
+    """``ordering.chain_nearest``: the nearest-neighbour chain from ``first``.
+
+    Each step goes to the nearest unvisited allowed midpoint, the first index
+    of equals: the first unvisited one in a stable ``argsort`` of the row.
+    """
+    m = len(station)
+    visited = np.zeros(m, np.bool_)
+    visited[first] = True
+    order = np.empty(m, np.intp)
+    order[0] = first
+    count = 1
+    current = first
+    while True:
+        nxt = -1
+        step = math.inf
+        cx = midpoints[current, 0]
+        cy = midpoints[current, 1]
+        for j in range(m):
+            if visited[j]:
+                continue
+            d = np.hypot(cx - midpoints[j, 0], cy - midpoints[j, 1])
+            advance = _wrap(station[j] - station[current], length, closed)
+            if (
+                d <= max_step
+                and advance <= max_station_step
+                and advance >= -back_tolerance
+                and advance >= min_advance * d
+                and d < math.inf
+                and (nxt < 0 or d < step)
+            ):
+                nxt = j
+                step = d
+        if nxt < 0:
+            break
+        visited[nxt] = True
+        if step < min_spacing:
+            continue
+        current = nxt
+        order[count] = current
+        count += 1
+    return order[:count]
+
+
+@njit(cache=True)
+def polyline_crosses(points, b0, b1):  # type: ignore[no-untyped-def]
+    """``geometry.polyline_crosses``: the polyline properly crosses a segment ``b0 b1``."""
+    p = len(points)
+    k = len(b0)
+    for c in range(k):
+        dbx = b1[c, 0] - b0[c, 0]
+        dby = b1[c, 1] - b0[c, 1]
+        cb = dbx * b0[c, 1] - dby * b0[c, 0]
+        prev = points[0, 1] * dbx - points[0, 0] * dby - cb
+        for j in range(p - 1):
+            nxt = points[j + 1, 1] * dbx - points[j + 1, 0] * dby - cb
+            if prev * nxt < 0.0:
+                ax = points[j, 0]
+                ay = points[j, 1]
+                dax = points[j + 1, 0] - ax
+                day = points[j + 1, 1] - ay
+                ca = dax * ay - day * ax
+                o0 = dax * b0[c, 1] - day * b0[c, 0] - ca
+                o1 = dax * b1[c, 1] - day * b1[c, 0] - ca
+                if o0 * o1 < 0.0:
+                    return True
+            prev = nxt
+    return False
