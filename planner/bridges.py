@@ -170,7 +170,7 @@ class PairTable:
     Attributes:
         left: (a,) indices of the left cones.
         right: (b,) indices of the right cones.
-        dist: (a, b) distance [m].
+        dist: (a, b) distance [m] where ``same_stretch``, inf elsewhere (never used).
         same_stretch: (a, b) station gap <= ``max_station_gap``.
         span: (a, b) offset of the left cone minus offset of the right one [m].
         middle: (a, b) mean of the two offsets [m].

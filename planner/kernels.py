@@ -38,9 +38,27 @@ _SX, _SY, _DX, _DY, _INV_LEN2, _MID_STATION, _HALF_LENGTH, _LENGTH, _STATION0 = 
 
 @njit(cache=True)
 def _wrap(diff, length, closed):  # type: ignore[no-untyped-def]
-    """``station_difference``'s wrap of one difference (Python's float ``%``)."""
+    """``station_difference``'s wrap of one difference: ``(x % length) - length / 2``.
+
+    With ``x = diff + length / 2``, Python's (and numpy's) float ``x % length``
+    is ``fmod`` moved onto the divisor's sign; ``fmod`` is exact, and for x in
+    [-length, 2 length) it is x, x (then + length) or x - length (exact by
+    Sterbenz's lemma). Those cases are written out (``fmod`` is slow); a zero
+    remainder is +0 as in Python. Anything else takes ``%``.
+    """
     if closed and length > 0.0:
-        return (diff + 0.5 * length) % length - 0.5 * length
+        x = diff + 0.5 * length
+        if 0.0 < x < length:
+            r = x
+        elif -length <= x < 0.0:
+            r = x + length
+        elif length <= x < 2.0 * length:
+            r = x - length
+        elif x == 0.0:
+            r = 0.0
+        else:
+            r = x % length
+        return r - 0.5 * length
     return diff
 
 
@@ -149,7 +167,11 @@ def in_view(  # type: ignore[no-untyped-def]  # noqa: PLR0917
 def pair_table(  # type: ignore[no-untyped-def]  # noqa: PLR0917
     points, side, offset, station, length, closed, max_gap
 ):
-    """``bridges.pair_table``: left, right, dist, same_stretch, span, middle."""
+    """``bridges.pair_table``: left, right, dist, same_stretch, span, middle.
+
+    The distance (``np.hypot``, the slow part) only where ``same_stretch``,
+    inf elsewhere: every use of it is on the same stretch.
+    """
     n = len(side)
     a = 0
     for i in range(n):
@@ -179,11 +201,65 @@ def pair_table(  # type: ignore[no-untyped-def]  # noqa: PLR0917
         li = left[r]
         for c in range(b):
             ri = right[c]
-            dist[r, c] = np.hypot(points[li, 0] - points[ri, 0], points[li, 1] - points[ri, 1])
             same[r, c] = abs(_wrap(station[ri] - station[li], length, closed)) <= max_gap
+            if same[r, c]:
+                dx = points[li, 0] - points[ri, 0]
+                dist[r, c] = np.hypot(dx, points[li, 1] - points[ri, 1])
+            else:
+                dist[r, c] = math.inf
             span[r, c] = offset[li] - offset[ri]
             middle[r, c] = 0.5 * (offset[li] + offset[ri])
     return left, right, dist, same, span, middle
+
+
+@njit(cache=True)
+def sub_table(keep, n, left, right, dist, same, span, middle):  # type: ignore[no-untyped-def]  # noqa: PLR0917
+    """The pair table of the cones ``keep`` (sorted rows of n cones) from their full table.
+
+    The same numbers as ``pair_table`` on the kept cones (each entry depends
+    on its two cones only), with the cones renumbered.
+    """
+    row = np.full(n, -1, np.intp)
+    col = np.full(n, -1, np.intp)
+    for r in range(len(left)):
+        row[left[r]] = r
+    for c in range(len(right)):
+        col[right[c]] = c
+    a = 0
+    b = 0
+    for q in range(len(keep)):
+        if row[keep[q]] >= 0:
+            a += 1
+        elif col[keep[q]] >= 0:
+            b += 1
+    rows = np.empty(a, np.intp)
+    cols = np.empty(b, np.intp)
+    new_left = np.empty(a, np.intp)
+    new_right = np.empty(b, np.intp)
+    a = 0
+    b = 0
+    for q in range(len(keep)):
+        r = row[keep[q]]
+        c = col[keep[q]]
+        if r >= 0:
+            rows[a] = r
+            new_left[a] = q
+            a += 1
+        elif c >= 0:
+            cols[b] = c
+            new_right[b] = q
+            b += 1
+    d = np.empty((a, b))
+    s = np.empty((a, b), np.bool_)
+    w = np.empty((a, b))
+    m = np.empty((a, b))
+    for i in range(a):
+        for j in range(b):
+            d[i, j] = dist[rows[i], cols[j]]
+            s[i, j] = same[rows[i], cols[j]]
+            w[i, j] = span[rows[i], cols[j]]
+            m[i, j] = middle[rows[i], cols[j]]
+    return new_left, new_right, d, s, w, m
 
 
 @njit(cache=True)
@@ -205,36 +281,34 @@ def estimate_track(  # type: ignore[no-untyped-def]  # noqa: PLR0917
 ):
     """``bridges.estimate_track``: (width, centre, measured); measured False gives (0, 0)."""
     a, b = dist.shape
-    valid = np.empty((a, b), np.bool_)
+    # One pass: each row's nearest valid partner and each column's (first of
+    # equals: rows and columns are visited in increasing order).
+    row_best = np.full(a, -1, np.intp)
+    col_best = np.full(b, -1, np.intp)
     for r in range(a):
         for c in range(b):
-            valid[r, c] = (
+            if (
                 same[r, c]
                 and span[r, c] >= min_width
                 and span[r, c] <= max_width
                 and dist[r, c] <= max_length
-            )
-    # Each row's nearest valid partner (first of equals), then each column's.
+            ):
+                if row_best[r] < 0 or dist[r, c] < dist[r, row_best[r]]:
+                    row_best[r] = c
+                if col_best[c] < 0 or dist[r, c] < dist[col_best[c], c]:
+                    col_best[c] = r
     picks_r = np.empty(a + b, np.intp)
     picks_c = np.empty(a + b, np.intp)
     rows = 0
     for r in range(a):
-        best = -1
-        for c in range(b):
-            if valid[r, c] and (best < 0 or dist[r, c] < dist[r, best]):
-                best = c
-        if best >= 0:
+        if row_best[r] >= 0:
             picks_r[rows] = r
-            picks_c[rows] = best
+            picks_c[rows] = row_best[r]
             rows += 1
     m = rows
     for c in range(b):
-        best = -1
-        for r in range(a):
-            if valid[r, c] and (best < 0 or dist[r, c] < dist[best, c]):
-                best = r
-        if best >= 0:
-            picks_r[m] = best
+        if col_best[c] >= 0:
+            picks_r[m] = col_best[c]
             picks_c[m] = c
             m += 1
     if rows == 0 or m < min_samples:
@@ -311,8 +385,8 @@ def boundary_cones(  # type: ignore[no-untyped-def]  # noqa: PLR0917
         if not on.all():
             inner = _rows(on)
             keep = keep[inner]
-            left, right, dist, same, span, middle = pair_table(
-                pts[inner], sd[inner], off[inner], st[inner], length, closed, max_gap
+            left, right, dist, same, span, middle = sub_table(
+                inner, len(sd), left, right, dist, same, span, middle
             )
     return keep, left, right, dist, same, span, middle, width, centre, measured
 
