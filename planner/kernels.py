@@ -648,3 +648,101 @@ def polyline_crosses(points, b0, b1):  # type: ignore[no-untyped-def]
                     return True
             prev = nxt
     return False
+
+
+@njit(cache=True)
+def speed_profile(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+    points,
+    s,
+    window,
+    a_lat,
+    v_max,
+    floor,
+    has_start,
+    v_start,
+    a_drive,
+    horizon_stop,
+    has_end,
+    v_end,
+    a_brake,
+):
+    """``speed_profile.speed_profile`` for n >= 1 points with their arc lengths ``s``.
+
+    Menger curvature, its ``window_mean`` when ``window > 0``, the curvature
+    limit (``floor = a_lat / v_max**2``), the start speed, the forward pass,
+    the horizon stop and the backward pass, each with the numpy version's
+    operations (running minima in the same direction; Python's ``min`` and
+    ``max`` for the start and end speeds).
+    """
+    n = len(points)
+    kappa = np.zeros(n)
+    if n >= 3:
+        for i in range(1, n - 1):
+            abx = points[i, 0] - points[i - 1, 0]
+            aby = points[i, 1] - points[i - 1, 1]
+            bcx = points[i + 1, 0] - points[i, 0]
+            bcy = points[i + 1, 1] - points[i, 1]
+            cross = abx * bcy - aby * bcx
+            denom = (
+                np.hypot(abx, aby)
+                * np.hypot(bcx, bcy)
+                * np.hypot(points[i + 1, 0] - points[i - 1, 0], points[i + 1, 1] - points[i - 1, 1])
+            )
+            if denom > 0.0:
+                kappa[i] = 2.0 * cross / denom
+        kappa[0] = kappa[1]
+        kappa[n - 1] = kappa[n - 2]
+    if window > 0.0 and n > 2:
+        spacing = s[n - 1] / (n - 1)
+        half = int(window / (2.0 * spacing)) if spacing > 0.0 else 0
+        if half >= 1:
+            c = np.zeros(n + 1)
+            total = 0.0
+            for i in range(n):
+                total += kappa[i]
+                c[i + 1] = total
+            smooth = np.empty(n)
+            for i in range(n):
+                lo = min(max(i - half, 0), n)
+                hi = min(max(i + half + 1, 0), n)
+                smooth[i] = (c[hi] - c[lo]) / (hi - lo)
+            kappa = smooth
+    v = np.empty(n)
+    for i in range(n):
+        k = abs(kappa[i])
+        v[i] = (
+            math.sqrt(a_lat / (k if k >= floor or math.isnan(k) else floor)) if k > floor else v_max
+        )
+    if has_start:
+        start = 0.0 if v_start < 0.0 else v_start  # Python's max(v_start, 0.0)
+        if start < v[0]:  # noqa: PLR1730 (Python's min(v[0], start))
+            v[0] = start
+    # Forward pass: sqrt(max(reach + running min of (v^2 - reach), 0)).
+    reach_d = 2.0 * a_drive
+    low = math.inf
+    for i in range(n):
+        reach = reach_d * s[i]
+        w = v[i] * v[i] - reach
+        if i == 0 or w < low or math.isnan(w):
+            low = w if not math.isnan(low) else low
+        x = reach + low
+        v[i] = math.sqrt(x if x >= 0.0 or math.isnan(x) else 0.0)
+    if horizon_stop:
+        if has_end:
+            end = 0.0 if v_end < 0.0 else v_end
+            if end < v[n - 1]:  # noqa: PLR1730
+                v[n - 1] = end
+        else:
+            v[n - 1] = 0.0
+    # Backward pass: sqrt(max(running min from the end of (v^2 + reach) - reach, 0)).
+    reach_b = 2.0 * a_brake
+    out = np.empty(n)
+    low = math.inf
+    for i in range(n - 1, -1, -1):
+        reach = reach_b * s[i]
+        w = v[i] * v[i] + reach
+        if i == n - 1 or w < low or math.isnan(w):
+            low = w if not math.isnan(low) else low
+        x = low - reach
+        out[i] = math.sqrt(x if x >= 0.0 or math.isnan(x) else 0.0)
+    return out

@@ -18,16 +18,19 @@ For waypoints p_0..p_{n-1} at arc lengths s_i:
    v_i^2 = min_{j>=i} (w_j + 2 a_b (s_j - s_i)). With ``horizon_stop`` the last
    waypoint's speed is 0: the car can always stop on the path it has seen.
 
-Written for speed (per plan, on ~60 waypoints): the step vectors and lengths
-are computed once for the arc length and the curvature.
+Written for speed (per plan, on ~60 waypoints): ``speed_profile`` runs the
+steps in one compiled loop (``planner.kernels.speed_profile``), with the same
+floating-point operations as the numpy functions below, which stay as the
+reference (``tests/planner/test_kernels.py`` compares them bit for bit).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from planner import kernels
 from planner.config import SpeedProfileConfig
-from planner.geometry import FloatArray
+from planner.geometry import FloatArray, arc_length
 
 _DEFAULT_CONFIG = SpeedProfileConfig()  # frozen: built once
 
@@ -108,18 +111,23 @@ def speed_profile(
     n = len(points)
     if n == 0:
         return np.zeros(0)
-    step = points[1:] - points[:-1]
-    step_length = np.hypot(step[:, 0], step[:, 1])
     if s is None:
-        s = np.zeros(n)
-        np.cumsum(step_length, out=s[1:])  # arc_length(points)
-    kappa = _menger(points, step, step_length)
-    if config.curvature_window > 0.0 and n > 2:
-        kappa = window_mean(kappa, float(s[-1]) / (n - 1), config.curvature_window)
-    v = curvature_limit(kappa, config)
-    if v_start is not None:
-        v[0] = min(v[0], max(v_start, 0.0))
-    v = forward_pass(s, v, config.a_drive)
-    if config.horizon_stop:
-        v[-1] = 0.0 if v_end is None else min(v[-1], max(v_end, 0.0))
-    return backward_pass(s, v, config.a_brake)
+        s = arc_length(points)
+    # The steps below in one compiled call (``kernels.speed_profile``; the
+    # functions above are the same steps in numpy, the same numbers).
+    speeds: FloatArray = kernels.speed_profile(
+        np.ascontiguousarray(points, dtype=float),
+        np.ascontiguousarray(s, dtype=float),
+        config.curvature_window,
+        config.a_lat_max,
+        config.v_max,
+        config.a_lat_max / config.v_max**2,  # curvature_limit's floor
+        v_start is not None,
+        0.0 if v_start is None else v_start,
+        config.a_drive,
+        config.horizon_stop,
+        v_end is not None,
+        0.0 if v_end is None else v_end,
+        config.a_brake,
+    )
+    return speeds
