@@ -223,15 +223,6 @@ class PathProjector:
             return None
         return (0.5 * (lo + hi), 0.5 * (hi - lo), penalty)
 
-    def _last_station(self, p: FloatArray, found: _Candidates) -> float:
-        """Station [m] of the last point's nearest segment on the whole path (no window)."""
-        dist = found.dist
-        if dist is not None and dist[-1, -1] <= dist[-1, 0] + self._half_max:
-            return float(self.project(p[-1:]).station[0])  # unsure: the full search
-        best = int(found.d2[-1].argmin())
-        row = found.rows[-1, best]
-        return float(row[_STATION0] + found.t[-1, best] * row[_LENGTH])
-
     def _project(
         self, p: FloatArray, found: _Candidates, prefer: tuple[float, float, float] | None
     ) -> Projection:
