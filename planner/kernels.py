@@ -37,7 +37,7 @@ _SX, _SY, _DX, _DY, _INV_LEN2, _MID_STATION, _HALF_LENGTH, _LENGTH, _STATION0 = 
 
 
 @njit(cache=True)
-def _wrap(diff, length, closed):  # type: ignore[no-untyped-def]
+def _wrap(diff, length, closed):
     """``station_difference``'s wrap of one difference: ``(x % length) - length / 2``.
 
     With ``x = diff + length / 2``, Python's (and numpy's) float ``x % length``
@@ -63,7 +63,7 @@ def _wrap(diff, length, closed):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def pick_segments(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+def pick_segments(  # noqa: PLR0917
     p, index, dist, table, has_dist, windowed, centre, half, penalty, length, closed, half_max
 ):
     """Each point's best candidate segment: (segment, t, squared distance, unsure).
@@ -122,7 +122,7 @@ def pick_segments(  # type: ignore[no-untyped-def]  # noqa: PLR0917
 
 
 @njit(cache=True)
-def project_rows(p, seg, t, d2, table):  # type: ignore[no-untyped-def]
+def project_rows(p, seg, t, d2, table):
     """``PathProjector._project``'s outputs: foot, station, offset, tangent, distance."""
     n = len(seg)
     foot = np.empty((n, 2))
@@ -149,7 +149,7 @@ def project_rows(p, seg, t, d2, table):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def in_view(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+def in_view(  # noqa: PLR0917
     points, offset, min_x, max_range, min_offset, max_offset
 ):
     """``midline.in_view``: (n,) mask of cones in range and at a boundary's offset."""
@@ -164,7 +164,7 @@ def in_view(  # type: ignore[no-untyped-def]  # noqa: PLR0917
 
 
 @njit(cache=True)
-def pair_table(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+def pair_table(  # noqa: PLR0917
     points, side, offset, station, length, closed, max_gap
 ):
     """``bridges.pair_table``: left, right, dist, same_stretch, span, middle.
@@ -213,7 +213,7 @@ def pair_table(  # type: ignore[no-untyped-def]  # noqa: PLR0917
 
 
 @njit(cache=True)
-def sub_table(keep, n, left, right, dist, same, span, middle):  # type: ignore[no-untyped-def]  # noqa: PLR0917
+def sub_table(keep, n, left, right, dist, same, span, middle):  # noqa: PLR0917
     """The pair table of the cones ``keep`` (sorted rows of n cones) from their full table.
 
     The same numbers as ``pair_table`` on the kept cones (each entry depends
@@ -263,7 +263,7 @@ def sub_table(keep, n, left, right, dist, same, span, middle):  # type: ignore[n
 
 
 @njit(cache=True)
-def median(values):  # type: ignore[no-untyped-def]
+def median(values):
     """``bridges.median``: middle value or ``(a + b) / 2`` of the sorted values; NaN if any."""
     ordered = np.sort(values)
     n = len(ordered)
@@ -276,7 +276,7 @@ def median(values):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def estimate_track(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+def estimate_track(  # noqa: PLR0917
     dist, same, span, middle, min_width, max_width, max_length, min_samples
 ):
     """``bridges.estimate_track``: (width, centre, measured); measured False gives (0, 0)."""
@@ -322,7 +322,7 @@ def estimate_track(  # type: ignore[no-untyped-def]  # noqa: PLR0917
 
 
 @njit(cache=True)
-def boundary_offset(side, offset, centre, width):  # type: ignore[no-untyped-def]
+def boundary_offset(side, offset, centre, width):
     """``TrackEstimate.boundary_offset``: ``side * (offset - centre) - width / 2``."""
     n = len(side)
     out = np.empty(n)
@@ -333,7 +333,7 @@ def boundary_offset(side, offset, centre, width):  # type: ignore[no-untyped-def
 
 
 @njit(cache=True)
-def _rows(mask):  # type: ignore[no-untyped-def]
+def _rows(mask):
     """``mask.nonzero()[0]``."""
     out = np.empty(len(mask), np.intp)
     m = 0
@@ -345,7 +345,7 @@ def _rows(mask):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def boundary_cones(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+def boundary_cones(  # noqa: PLR0917
     points,
     side,
     offset,
@@ -392,7 +392,7 @@ def boundary_cones(  # type: ignore[no-untyped-def]  # noqa: PLR0917
 
 
 @njit(cache=True)
-def partners_needed(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+def partners_needed(  # noqa: PLR0917
     side, offset, left, right, same, dist, radius, centre, width, tolerance
 ):
     """``virtual_partners``' selection: rows of the cones that get a virtual partner."""
@@ -412,7 +412,7 @@ def partners_needed(  # type: ignore[no-untyped-def]  # noqa: PLR0917
 
 
 @njit(cache=True)
-def delaunay_edges(simplices, n):  # type: ignore[no-untyped-def]
+def delaunay_edges(simplices, n):
     """Unique edges (e, 2), i < j, in the order of ``Delaunay.vertex_neighbor_vertices``.
 
     scipy builds each vertex's neighbour list by walking the simplices and
@@ -461,7 +461,7 @@ def delaunay_edges(simplices, n):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def find_bridges(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+def find_bridges(  # noqa: PLR0917
     edges,
     points,
     side,
@@ -533,7 +533,7 @@ def find_bridges(  # type: ignore[no-untyped-def]  # noqa: PLR0917
 
 
 @njit(cache=True)
-def boundary_edges(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+def boundary_edges(  # noqa: PLR0917
     edges, side, offset, station, length, closed, min_width, max_gap
 ):
     """``bridges.boundary_edges``: rows of the same-side edges along one boundary."""
@@ -551,7 +551,7 @@ def boundary_edges(  # type: ignore[no-untyped-def]  # noqa: PLR0917
 
 
 @njit(cache=True)
-def start_index(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+def start_index(  # noqa: PLR0917
     midpoints, station, sensor_station, length, closed, start_min_x, start_back, start_ahead
 ):
     """``ordering.start_index``: the nearest midpoint in front (first of equals), or -1."""
@@ -569,7 +569,7 @@ def start_index(  # type: ignore[no-untyped-def]  # noqa: PLR0917
 
 
 @njit(cache=True)
-def chain_nearest(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+def chain_nearest(  # noqa: PLR0917
     midpoints,
     station,
     first,
@@ -625,7 +625,7 @@ def chain_nearest(  # type: ignore[no-untyped-def]  # noqa: PLR0917
 
 
 @njit(cache=True)
-def polyline_crosses(points, b0, b1):  # type: ignore[no-untyped-def]
+def polyline_crosses(points, b0, b1):
     """``geometry.polyline_crosses``: the polyline properly crosses a segment ``b0 b1``."""
     p = len(points)
     k = len(b0)
@@ -651,7 +651,7 @@ def polyline_crosses(points, b0, b1):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def speed_profile(  # type: ignore[no-untyped-def]  # noqa: PLR0917
+def speed_profile(  # noqa: PLR0917
     points,
     s,
     window,
@@ -749,7 +749,7 @@ def speed_profile(  # type: ignore[no-untyped-def]  # noqa: PLR0917
 
 
 @njit(cache=True)
-def _find_interval(t, k, x, prev):  # type: ignore[no-untyped-def]
+def _find_interval(t, k, x, prev):
     """scipy's ``_find_interval`` (extrapolating): l with t[l] <= x < t[l + 1], k <= l < n."""
     n = len(t) - k - 1
     if math.isnan(x):
@@ -764,7 +764,7 @@ def _find_interval(t, k, x, prev):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def _spline_at(t, c, k, x, out, row, prev, work):  # type: ignore[no-untyped-def]  # noqa: PLR0917
+def _spline_at(t, c, k, x, out, row, prev, work):  # noqa: PLR0917
     """``out[row]`` = the B-spline (t, c (n, 2), k) at x, as ``BSpline.__call__`` computes it.
 
     scipy's ``evaluate_spline``: the interval, de Boor's recursion for the
@@ -800,7 +800,7 @@ def _spline_at(t, c, k, x, out, row, prev, work):  # type: ignore[no-untyped-def
 
 
 @njit(cache=True)
-def spline_path(t, c, k, count, spacing):  # type: ignore[no-untyped-def]
+def spline_path(t, c, k, count, spacing):
     """``spline.spline_through`` after the fit: points every ``spacing`` along the spline.
 
     The spline at ``count`` parameters ``i / (count - 1)`` (the last exactly
