@@ -39,19 +39,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 from localization.global_path import GlobalPath
 from planner import kernels
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
-
-_CANDIDATES = (8, 32)  # nearest segment midpoints tested per point, first then second pass
 
 
 @dataclass(frozen=True, slots=True)
@@ -86,18 +82,7 @@ class Projection:
         )
 
 
-class _Candidates(NamedTuple):
-    """Candidate segments (n, k) of n points.
-
-    ``dist`` is the distance to each candidate's midpoint (None when every
-    segment is a candidate), ``segment`` the candidates' indices.
-    """
-
-    dist: FloatArray | None
-    segment: IntArray
-
-
-_NO_DIST = np.zeros((0, 0))  # ``kernels.pick_segments``' distances when there are none
+_BLOCK = 16  # segments per bounding circle of the search (``kernels.nearest_segments``)
 
 
 # Columns of the segment table: start x, y, direction x, y, 1 / length^2,
@@ -127,8 +112,8 @@ class PathProjector:
         self._half_length = 0.5 * self._length
         self._station0 = np.concatenate([[0.0], np.cumsum(self._length)[:-1]])
         self._mid_station = self._station0 + self._half_length
-        self._tree = cKDTree(self._start + 0.5 * self._delta)
         self._half_max = 0.5 * float(self._length.max())
+        self._blocks = _bounding_circles(self._start, self._delta)
         # One row per segment (columns ``_SX`` ...), gathered with a single
         # ``take`` per query.
         self._table = np.column_stack(
@@ -170,7 +155,7 @@ class PathProjector:
                 if no segment is in it), 0 ignores the window.
         """
         p = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
-        return self._project(p, self._candidates(p), self._preference(window, penalty))
+        return self._project(p, self._preference(window, penalty))
 
     def project_around(
         self,
@@ -185,7 +170,7 @@ class PathProjector:
         The same as ``project(points, (centre - back, centre + ahead), penalty)``
         where ``centre`` is None is the last point's station on the whole path
         (``project(points[-1:]).station[0]``); ``penalty <= 0`` projects with no
-        window. One k-d tree query serves both projections.
+        window.
 
         Args:
             points: (n, 2) [m], n >= 1; the last row is the window's origin.
@@ -195,13 +180,12 @@ class PathProjector:
             centre: the window's origin station [m], if known.
         """
         p = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
-        found = self._candidates(p)
         prefer = None
         if penalty > 0.0:
             if centre is None:
-                centre = self._last_station(p, found)
+                centre = float(self._project(p[-1:], None).station[0])
             prefer = self._preference((centre - back, centre + ahead), penalty)
-        return self._project(p, found, prefer)
+        return self._project(p, prefer)
 
     @property
     def axis(self) -> StationAxis:
@@ -223,93 +207,40 @@ class PathProjector:
             return None
         return (0.5 * (lo + hi), 0.5 * (hi - lo), penalty)
 
-    def _project(
-        self, p: FloatArray, found: _Candidates, prefer: tuple[float, float, float] | None
-    ) -> Projection:
-        """The projections of ``p`` given its first-pass candidates."""
-        seg, t, d2 = self._nearest(p, found, prefer)
-        foot, station, offset, tangent, distance = kernels.project_rows(p, seg, t, d2, self._table)
-        return Projection(foot, seg, station, offset, tangent, distance)
+    def _project(self, p: FloatArray, prefer: tuple[float, float, float] | None) -> Projection:
+        """The projections of ``p`` (contiguous (n, 2)) with the window ``prefer``.
 
-    def _candidates(self, p: FloatArray, wanted: int = _CANDIDATES[0]) -> _Candidates:
-        """The segments of the ``wanted`` nearest midpoints of each point (k-d tree)."""
-        k = min(wanted, len(self._length))
-        dist, index = self._tree.query(p, k=k)
-        index = np.asarray(index, dtype=np.intp).reshape(len(p), k)
-        dist = np.asarray(dist, dtype=float).reshape(len(p), k)
-        if k == len(self._length):
-            return _Candidates(None, index)  # every segment is a candidate: the result is sure
-        return _Candidates(dist, index)
-
-    def _pick(
-        self,
-        p: FloatArray,
-        found: _Candidates,
-        prefer: tuple[float, float, float] | None,
-    ) -> tuple[IntArray, FloatArray, FloatArray, NDArray[np.bool_] | None]:
-        """The best candidate of each point: segment, t, squared distance, and whether unsure.
-
-        The candidates' foot parameter and squared distance, plus the penalty
-        of those outside the preferred window (``prefer``: centre, half width,
-        penalty [m]; None for no window), least of each row (compiled:
-        ``kernels.pick_segments``). The unsure mask is None when every
-        segment was a candidate.
+        ``prefer`` is the window's (centre, half width, penalty) [m], None for
+        no window. Compiled: the search (``kernels.nearest_segments``) and the
+        projection's numbers (``kernels.project_rows``).
         """
-        has_dist = found.dist is not None
         centre, half, penalty = (0.0, 0.0, 0.0) if prefer is None else prefer
-        seg, t, d2, unsure = kernels.pick_segments(
+        seg, t, d2 = kernels.nearest_segments(
             p,
-            found.segment,
-            found.dist if found.dist is not None else _NO_DIST,
             self._table,
-            has_dist,
+            self._blocks,
+            _BLOCK,
             prefer is not None,
             centre,
             half,
             penalty,
             self.length,
             self.closed,
-            self._half_max,
         )
-        return seg, t, d2, unsure if has_dist else None
+        foot, station, offset, tangent, distance = kernels.project_rows(p, seg, t, d2, self._table)
+        return Projection(foot, seg, station, offset, tangent, distance)
 
-    def _last_station(self, p: FloatArray, found: _Candidates) -> float:
-        """Station [m] of the last point's nearest segment on the whole path (no window)."""
-        last = _Candidates(None if found.dist is None else found.dist[-1:], found.segment[-1:])
-        seg, t, _, unsure = self._pick(p[-1:], last, None)
-        if unsure is not None and unsure[0]:
-            return float(self.project(p[-1:]).station[0])  # unsure: the full search
-        row = self._table[seg[0]]
-        return float(row[_STATION0] + t[0] * row[_LENGTH])
 
-    def _nearest(
-        self, p: FloatArray, found: _Candidates, prefer: tuple[float, float, float] | None
-    ) -> tuple[IntArray, FloatArray, FloatArray]:
-        """Each point's segment of least distance + penalty: (segment, t, squared distance).
-
-        ``found`` holds the first pass's candidates; ``prefer`` is the window's
-        (centre, half width, penalty) [m], None for no window.
-
-        The k nearest midpoints are candidates. A point is sure when its k-th
-        midpoint is farther than ``first + L_max / 2``, where ``first`` is the
-        least candidate midpoint distance + extra: the best segment's distance
-        is at most ``first``, so its midpoint is within that bound (module
-        docstring). Unsure points are tried again with a larger k, then
-        against every segment.
-        """
-        seg, t, d2, unsure = self._pick(p, found, prefer)
-        todo = unsure.nonzero()[0] if unsure is not None else None
-        for wanted in _CANDIDATES[1:]:
-            if todo is None or len(todo) == 0:
-                return seg, t, d2
-            found = self._candidates(p[todo], wanted)
-            seg[todo], t[todo], d2[todo], unsure = self._pick(p[todo], found, prefer)
-            todo = todo[unsure] if unsure is not None else None
-        if todo is not None and len(todo):
-            n_seg = len(self._length)
-            every = np.ascontiguousarray(np.broadcast_to(np.arange(n_seg), (len(todo), n_seg)))
-            seg[todo], t[todo], d2[todo], _ = self._pick(p[todo], _Candidates(None, every), prefer)
-        return seg, t, d2
+def _bounding_circles(start: FloatArray, delta: FloatArray) -> FloatArray:
+    """(b, 3) circles (x, y, r) holding each ``_BLOCK`` consecutive segments, r padded by 1e-9."""
+    ends = np.concatenate([start, start + delta], axis=1).reshape(-1, 4)
+    circles = []
+    for first in range(0, len(start), _BLOCK):
+        xy = ends[first : first + _BLOCK].reshape(-1, 2)
+        centre = 0.5 * (xy.min(axis=0) + xy.max(axis=0))
+        radius = float(np.hypot(*(xy - centre).T).max())
+        circles.append([centre[0], centre[1], radius * (1.0 + 1e-12) + 1e-9])
+    return np.array(circles, dtype=float).reshape(-1, 3)
 
 
 @dataclass(frozen=True, slots=True)

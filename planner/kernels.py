@@ -63,62 +63,116 @@ def _wrap(diff, length, closed):
 
 
 @njit(cache=True)
-def pick_segments(  # noqa: PLR0917
-    p, index, dist, table, has_dist, windowed, centre, half, penalty, length, closed, half_max
-):
-    """Each point's best candidate segment: (segment, t, squared distance, unsure).
+def _mid2(px, py, table, s):
+    """Squared distance from (px, py) to segment s's midpoint (what a k-d tree on them ranks)."""
+    mx = px - (table[s, _SX] + 0.5 * table[s, _DX])
+    my = py - (table[s, _SY] + 0.5 * table[s, _DY])
+    return mx * mx + my * my
 
-    ``PathProjector._measure`` + ``_penalty`` + ``_pick`` on candidates
-    ``index`` (n, k) with midpoint distances ``dist`` (used when ``has_dist``).
-    Without a window the score is the squared distance, with one the
-    distance plus the penalty of segments outside [centre - half, centre +
-    half] (widened by each segment's half length). Ties go to the first
-    candidate (``argmin``); a NaN score wins (``argmin`` returns the first NaN).
+
+@njit(cache=True)
+def nearest_segments(  # noqa: PLR0917
+    p, table, blocks, size, windowed, centre, half, penalty, length, closed
+):
+    """Each point's segment of least score: (segment, t, squared distance).
+
+    The score is the squared distance without a window; with one, the
+    distance plus ``penalty`` for a segment outside [centre - half, centre +
+    half] (widened by its half length), as ``PathProjector.project``
+    defines it. Ties go to the nearer segment midpoint, then the lower
+    index. A point with a NaN coordinate gets segment 0 and NaN.
+
+    The segments are grouped ``size`` at a time into blocks, each inside a
+    circle ``blocks[b] = (x, y, r)``; no segment of a block is nearer than
+    ``hypot(p - (x, y)) - r``. Per point: the blocks holding a window segment
+    (all blocks without a window), nearest bound first, each skipped when its
+    bound exceeds the best score so far (plus 1e-9 m for rounding); then,
+    with a window, the other blocks only if the best score reaches
+    ``penalty`` (their segments all score at least that). Exact: a skipped
+    segment cannot score as low as the best.
     """
-    n, k = index.shape
-    seg = np.empty(n, np.intp)
-    t_best = np.empty(n)
-    d2_best = np.empty(n)
-    unsure = np.zeros(n, np.bool_)
+    n = len(p)
+    n_seg = table.shape[0]
+    n_block = blocks.shape[0]
+    cost = np.zeros(n_seg)
+    first_tier = np.zeros(n_block, np.bool_)
+    if windowed:
+        for s in range(n_seg):
+            away = abs(_wrap(table[s, _MID_STATION] - centre, length, closed))
+            if away <= half + table[s, _HALF_LENGTH]:
+                first_tier[s // size] = True
+            else:
+                cost[s] = penalty
+    else:
+        first_tier[:] = True
+    bound = np.empty(n_block)
+    seg = np.zeros(n, np.intp)
+    t_best = np.full(n, math.nan)
+    d2_best = np.full(n, math.nan)
     for i in range(n):
         px = p[i, 0]
         py = p[i, 1]
-        best = -1
-        best_score = 0.0
-        first = math.inf
-        for c in range(k):
-            s = index[i, c]
-            rx = px - table[s, _SX]
-            ry = py - table[s, _SY]
-            dx = table[s, _DX]
-            dy = table[s, _DY]
-            t = (rx * dx + ry * dy) * table[s, _INV_LEN2]
-            if t < 0.0:  # noqa: PLR1730 (np.maximum(t, 0.0): NaN stays NaN)
-                t = 0.0
-            if t > 1.0:  # noqa: PLR1730 (np.minimum(t, 1.0))
-                t = 1.0
-            gx = rx - t * dx
-            gy = ry - t * dy
-            d2 = gx * gx + gy * gy
-            if windowed:
-                away = abs(_wrap(table[s, _MID_STATION] - centre, length, closed))
-                cost = 0.0 if away <= half + table[s, _HALF_LENGTH] else penalty
-                score = math.sqrt(d2) + cost
-                if has_dist:
-                    first = min(first, dist[i, c] + cost)
-            else:
-                score = d2
-            if best < 0 or score < best_score or (math.isnan(score) and not math.isnan(best_score)):
-                best = c
-                best_score = score
-                seg[i] = s
-                t_best[i] = t
-                d2_best[i] = d2
-        if has_dist:
-            if not windowed:
-                first = dist[i, 0]
-            unsure[i] = dist[i, k - 1] <= first + half_max
-    return seg, t_best, d2_best, unsure
+        best = math.inf
+        best_seg = -1
+        first = -1
+        low = math.inf
+        for b in range(n_block):
+            if first_tier[b]:
+                dx = px - blocks[b, 0]
+                dy = py - blocks[b, 1]
+                bound[b] = math.sqrt(dx * dx + dy * dy) - blocks[b, 2]
+                if bound[b] < low:
+                    low = bound[b]
+                    first = b
+        if first < 0:
+            continue  # NaN
+        for tier in range(3):
+            # tier 0: the nearest first-tier block; 1: the other first-tier
+            # blocks; 2: with a window, the blocks outside it.
+            if tier == 2 and not windowed:
+                break
+            reach = best if windowed else math.sqrt(best)
+            reach += 1e-9 + 1e-12 * abs(reach)
+            if tier == 2 and reach < penalty:
+                break
+            for b in range(n_block):
+                if tier == 0 and b != first:
+                    continue
+                if tier == 1 and (b == first or not first_tier[b] or bound[b] > reach):
+                    continue
+                if tier == 2:
+                    if first_tier[b]:
+                        continue
+                    dx = px - blocks[b, 0]
+                    dy = py - blocks[b, 1]
+                    if math.sqrt(dx * dx + dy * dy) - blocks[b, 2] + penalty > reach:
+                        continue
+                for s in range(b * size, min((b + 1) * size, n_seg)):
+                    rx = px - table[s, _SX]
+                    ry = py - table[s, _SY]
+                    sdx = table[s, _DX]
+                    sdy = table[s, _DY]
+                    t = (rx * sdx + ry * sdy) * table[s, _INV_LEN2]
+                    if t < 0.0:  # noqa: PLR1730 (np.maximum(t, 0.0))
+                        t = 0.0
+                    if t > 1.0:  # noqa: PLR1730 (np.minimum(t, 1.0))
+                        t = 1.0
+                    gx = rx - t * sdx
+                    gy = ry - t * sdy
+                    d2 = gx * gx + gy * gy
+                    score = math.sqrt(d2) + cost[s] if windowed else d2
+                    better = score < best or best_seg < 0
+                    if not better and score == best:
+                        here = _mid2(px, py, table, s)
+                        there = _mid2(px, py, table, best_seg)
+                        better = here < there or (here == there and s < best_seg)
+                    if better:
+                        best = score
+                        best_seg = s
+                        seg[i] = s
+                        t_best[i] = t
+                        d2_best[i] = d2
+    return seg, t_best, d2_best
 
 
 @njit(cache=True)
