@@ -9,30 +9,32 @@ for a point ``p`` and a segment from ``a`` with direction ``d``::
 The signed offset is ``side / |d|`` (distance from the segment's line, + left)
 and the station is the arc length from the path's first point to the foot.
 
-Finding the nearest segment exactly without testing all of them: the foot of
-the nearest segment lies on it, so that segment's midpoint is within
-``d* + L_max / 2`` of ``p``, where ``d*`` is the nearest-segment distance and
-``L_max`` the longest segment; ``d*`` is at most the distance to the nearest
-midpoint. A k-d tree over the midpoints returns the k nearest; a point whose
-k-th neighbour is not beyond that bound is tested against every segment.
+Finding the nearest segment exactly without testing all of them: the
+segments are grouped 16 at a time (consecutive along the path) into
+bounding circles; no segment of a circle (x, y, r) is nearer to ``p`` than
+``|p - (x, y)| - r``. A circle whose bound exceeds the best score found so
+far (plus 1e-9 m for rounding) is skipped. Ties of the score go to the
+nearer segment midpoint, then to the lower index.
 
 A path that passes the same place more than once (the skidpad's centre, a
 crossing) makes "the nearest segment" ambiguous. ``project`` therefore takes
 an optional station window [lo, hi] (wrapped on a closed path) and a penalty:
 segments outside the window count as ``penalty`` metres farther. Near-ties go
 to the window's stretch; a point clearly nearest another stretch still
-projects there. The same bound holds with distances plus penalties.
+projects there. The same bound holds with distances plus penalties: the
+circles holding a window segment are searched first (nearest bound first),
+the others only when the best score reaches ``penalty``, which for a cone
+near the current stretch it does not.
 
 Written for speed (the planner runs this per detection, on a few dozen
 points, where numpy's per-call overhead of about a microsecond dominates):
-the distances to the k candidate segments do not depend on the window, so
-``PathProjector.project_around`` queries the k-d tree once for the cones and
-the sensor and picks the sensor's unwindowed and everyone's windowed segment
-from the same candidates, whose table rows are gathered with one ``take``
-(several times faster than ``[]`` on 2-D arrays). ``polyline_crosses`` tests
-only the path segments that straddle a boundary edge's line instead of every
-pair. The results are the same numbers as the straightforward code (same
-operations per element; ``tests/planner/test_speedups.py``).
+the search and the projection's numbers are compiled loops
+(``planner.kernels.nearest_segments``, ``project_rows``; they replaced a k-d
+tree over the midpoints plus numpy glue, twice the time), and so is
+``polyline_crosses``, which tests only the path segments that straddle a
+boundary edge's line and stops at the first crossing. The results are the
+numbers of the straightforward code (same operations per element;
+``tests/planner/test_kernels.py`` keeps the k-d tree version as the reference).
 """
 
 from __future__ import annotations
@@ -91,7 +93,7 @@ _SX, _SY, _DX, _DY, _INV_LEN2, _MID_STATION, _HALF_LENGTH, _LENGTH, _STATION0 = 
 
 
 class PathProjector:
-    """Nearest-segment projection onto a global path, with a k-d tree.
+    """Nearest-segment projection onto a global path (compiled search over bounding circles).
 
     Args:
         path: the global path in ``reference``; a closed path includes the
