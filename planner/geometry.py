@@ -323,12 +323,12 @@ def polyline_crosses(points: FloatArray, b0: FloatArray, b1: FloatArray) -> bool
 
 
 def arc_length(points: FloatArray) -> FloatArray:
-    """Cumulative arc length of an (n, 2) polyline, starting at 0 [m]; shape (max(n, 1),)."""
-    n = len(points)
-    s = np.zeros(max(n, 1))
-    if n > 1:
-        d = points[1:] - points[:-1]
-        np.cumsum(np.hypot(d[:, 0], d[:, 1]), out=s[1:])
+    """Cumulative arc length of an (n, 2) polyline, starting at 0 [m]; shape (max(n, 1),).
+
+    The running sum of ``np.hypot`` of the steps, as ``np.cumsum`` adds
+    (compiled: ``kernels.arc_length``).
+    """
+    s: FloatArray = kernels.arc_length(np.ascontiguousarray(points, dtype=float).reshape(-1, 2))
     return s
 
 

@@ -917,3 +917,56 @@ def spline_path(t, c, k, count, spacing):
         if not (math.isfinite(path[i, 0]) and math.isfinite(path[i, 1])):
             return np.zeros((0, 2))
     return path
+
+
+@njit(cache=True)
+def arc_length(points):
+    """``geometry.arc_length``: 0, then the running sum of the step lengths (``np.hypot``)."""
+    n = len(points)
+    s = np.zeros(max(n, 1))
+    total = 0.0
+    for i in range(1, n):
+        total += np.hypot(points[i, 0] - points[i - 1, 0], points[i, 1] - points[i - 1, 1])
+        s[i] = total
+    return s
+
+
+@njit(cache=True)
+def crosses_boundary(points, boundary):
+    """``polyline_crosses(points, boundary[:, 0], boundary[:, 1])`` for (e, 2, 2) edges."""
+    if len(points) < 2 or len(boundary) == 0:
+        return False
+    return polyline_crosses(points, boundary[:, 0], boundary[:, 1])
+
+
+@njit(cache=True)
+def ordered_midpoints(  # noqa: PLR0917
+    used,
+    midpoints,
+    station,
+    sensor_station,
+    length,
+    closed,
+    start_min_x,
+    start_back,
+    start_ahead,
+    max_step,
+    max_station_step,
+    back_tolerance,
+    min_advance,
+    min_spacing,
+):
+    """``ordering.ordered_midpoints``: the used bridges' midpoints in driving order."""
+    rows = _rows(used)
+    mid = midpoints[rows]
+    st = station[rows]
+    first = start_index(
+        mid, st, sensor_station, length, closed, start_min_x, start_back, start_ahead
+    )
+    if first < 0:
+        return np.zeros((0, 2))
+    order = chain_nearest(
+        mid, st, first, length, closed, max_step, max_station_step, back_tolerance, min_advance,
+        min_spacing,
+    )  # fmt: skip
+    return mid[order]

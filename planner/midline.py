@@ -53,7 +53,7 @@ from planner.bridges import (
 )
 from planner.classify import LEFT, RIGHT, ClassifiedCones
 from planner.config import MidlineConfig, SpeedProfileConfig
-from planner.geometry import FloatArray, arc_length, polyline_crosses
+from planner.geometry import FloatArray, arc_length
 from planner.messages import BridgeLines, LocalPath, Midpoints, Waypoints
 from planner.ordering import ordered_midpoints
 from planner.speed_profile import speed_profile
@@ -244,7 +244,7 @@ def check_path(
     start = float(np.hypot(path[0, 0], path[0, 1]))
     if start > config.max_start_distance:
         return f"path starts {start:.2f} m away (max {config.max_start_distance} m)"
-    if len(boundary) and polyline_crosses(path, boundary[:, 0], boundary[:, 1]):
+    if kernels.crosses_boundary(path, boundary):  # polyline_crosses, compiled
         return "path crosses a track boundary"
     return ""
 

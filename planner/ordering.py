@@ -108,9 +108,24 @@ def order_midpoints(
 def ordered_midpoints(
     bridges: Bridges, sensor_station: float, axis: StationAxis, config: MidlineConfig
 ) -> FloatArray:
-    """The used bridges' midpoints (m, 2) [m], in driving order from the one in front."""
-    used = bridges.used.nonzero()[0]
-    order = order_midpoints(
-        bridges.midpoints.take(used, axis=0), bridges.station[used], sensor_station, axis, config
+    """The used bridges' midpoints (m, 2) [m], in driving order from the one in front.
+
+    ``order_midpoints`` on the used bridges, in one compiled call.
+    """
+    ordered: FloatArray = kernels.ordered_midpoints(
+        bridges.used,
+        bridges.midpoints,
+        bridges.station,
+        sensor_station,
+        axis.length,
+        axis.closed,
+        config.start_min_x,
+        config.start_station_back,
+        config.start_station_ahead,
+        config.max_step,
+        config.max_station_step,
+        config.station_back_tolerance,
+        config.min_step_advance,
+        config.min_midpoint_spacing,
     )
-    return bridges.midpoints.take(used[order], axis=0)
+    return ordered
