@@ -9,7 +9,11 @@ a perf profile gave the Python interpreter 34 %, numpy's per-call overhead
 kernel below replaces a chain of small numpy calls (masks, outer products,
 gathers, argmins, a Python walk) with one loop over the elements, compiled
 once (``cache=True``: later processes load the machine code from the cache
-next to this file, or from ``NUMBA_CACHE_DIR``).
+next to this file, or from ``NUMBA_CACHE_DIR`` or the user's cache directory
+when the package directory is not writable, e.g. a system install; with no
+writable cache directory at all they compile in each process, with a
+warning). Compiling all of them from a cold cache takes about 10 s on the
+2-core development machine, loading them from the cache about 0.2 s.
 
 Every kernel does the same IEEE operations per element, in the same order,
 as the numpy code it replaces (no ``fastmath``, so no reassociation or
@@ -28,15 +32,44 @@ C-contiguous, so each kernel compiles to one specialisation.
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 from numba import njit
+
+
+def _probe() -> None:
+    """Nothing: the function ``_cache_usable`` asks numba to cache."""
+
+
+def _cache_usable() -> bool:
+    """Whether numba finds a cache directory for this file.
+
+    It tries ``__pycache__`` beside this file, then ``NUMBA_CACHE_DIR`` or
+    the user's cache directory; with none writable, ``njit(cache=True)``
+    raises at decoration. The kernels are then compiled in every process
+    (about 10 s on the first planning step) instead of failing to import.
+    """
+    try:
+        njit(cache=True)(_probe)
+    except RuntimeError:
+        warnings.warn(
+            "planner.kernels: numba has no writable cache directory (set NUMBA_CACHE_DIR); "
+            "the kernels are compiled in every process",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+        return False
+    return True
+
+
+_compiled = njit(cache=_cache_usable())
 
 # Columns of ``PathProjector``'s segment table (``geometry``).
 _SX, _SY, _DX, _DY, _INV_LEN2, _MID_STATION, _HALF_LENGTH, _LENGTH, _STATION0 = range(9)
 
 
-@njit(cache=True)
+@_compiled
 def _wrap(diff, length, closed):
     """``station_difference``'s wrap of one difference: ``(x % length) - length / 2``.
 
@@ -62,7 +95,7 @@ def _wrap(diff, length, closed):
     return diff
 
 
-@njit(cache=True)
+@_compiled
 def _mid2(px, py, table, s):
     """Squared distance from (px, py) to segment s's midpoint (what a k-d tree on them ranks)."""
     mx = px - (table[s, _SX] + 0.5 * table[s, _DX])
@@ -70,7 +103,7 @@ def _mid2(px, py, table, s):
     return mx * mx + my * my
 
 
-@njit(cache=True)
+@_compiled
 def nearest_segments(  # noqa: PLR0917
     p, table, blocks, size, windowed, centre, half, penalty, length, closed
 ):
@@ -175,7 +208,7 @@ def nearest_segments(  # noqa: PLR0917
     return seg, t_best, d2_best
 
 
-@njit(cache=True)
+@_compiled
 def project_rows(p, seg, t, d2, table):
     """``PathProjector._project``'s outputs: foot, station, offset, tangent, distance."""
     n = len(seg)
@@ -202,7 +235,7 @@ def project_rows(p, seg, t, d2, table):
     return foot, station, offset, tangent, distance
 
 
-@njit(cache=True)
+@_compiled
 def in_view(  # noqa: PLR0917
     points, offset, min_x, max_range, min_offset, max_offset
 ):
@@ -217,7 +250,7 @@ def in_view(  # noqa: PLR0917
     return keep
 
 
-@njit(cache=True)
+@_compiled
 def pair_table(  # noqa: PLR0917
     points, side, offset, station, length, closed, max_gap
 ):
@@ -266,7 +299,7 @@ def pair_table(  # noqa: PLR0917
     return left, right, dist, same, span, middle
 
 
-@njit(cache=True)
+@_compiled
 def sub_table(keep, n, left, right, dist, same, span, middle):  # noqa: PLR0917
     """The pair table of the cones ``keep`` (sorted rows of n cones) from their full table.
 
@@ -316,7 +349,7 @@ def sub_table(keep, n, left, right, dist, same, span, middle):  # noqa: PLR0917
     return new_left, new_right, d, s, w, m
 
 
-@njit(cache=True)
+@_compiled
 def median(values):
     """``bridges.median``: middle value or ``(a + b) / 2`` of the sorted values; NaN if any."""
     ordered = np.sort(values)
@@ -329,7 +362,7 @@ def median(values):
     return (ordered[half - 1] + ordered[half]) / 2.0
 
 
-@njit(cache=True)
+@_compiled
 def estimate_track(  # noqa: PLR0917
     dist, same, span, middle, min_width, max_width, max_length, min_samples
 ):
@@ -375,7 +408,7 @@ def estimate_track(  # noqa: PLR0917
     return median(widths), median(centres), True
 
 
-@njit(cache=True)
+@_compiled
 def boundary_offset(side, offset, centre, width):
     """``TrackEstimate.boundary_offset``: ``side * (offset - centre) - width / 2``."""
     n = len(side)
@@ -386,7 +419,7 @@ def boundary_offset(side, offset, centre, width):
     return out
 
 
-@njit(cache=True)
+@_compiled
 def _rows(mask):
     """``mask.nonzero()[0]``."""
     out = np.empty(len(mask), np.intp)
@@ -398,7 +431,7 @@ def _rows(mask):
     return out[:m]
 
 
-@njit(cache=True)
+@_compiled
 def boundary_cones(  # noqa: PLR0917
     points,
     side,
@@ -445,7 +478,7 @@ def boundary_cones(  # noqa: PLR0917
     return keep, left, right, dist, same, span, middle, width, centre, measured
 
 
-@njit(cache=True)
+@_compiled
 def partners_needed(  # noqa: PLR0917
     side, offset, left, right, same, dist, radius, centre, width, tolerance
 ):
@@ -465,7 +498,7 @@ def partners_needed(  # noqa: PLR0917
     return _rows(need)
 
 
-@njit(cache=True)
+@_compiled
 def delaunay_edges(simplices, n):
     """Unique edges (e, 2), i < j, in the order of ``Delaunay.vertex_neighbor_vertices``.
 
@@ -514,7 +547,7 @@ def delaunay_edges(simplices, n):
     return edges
 
 
-@njit(cache=True)
+@_compiled
 def find_bridges(  # noqa: PLR0917
     edges,
     points,
@@ -586,7 +619,7 @@ def find_bridges(  # noqa: PLR0917
     return left, right, size, valid, used, mid, mid_station
 
 
-@njit(cache=True)
+@_compiled
 def boundary_edges(  # noqa: PLR0917
     edges, side, offset, station, length, closed, min_width, max_gap
 ):
@@ -604,7 +637,7 @@ def boundary_edges(  # noqa: PLR0917
     return _rows(along)
 
 
-@njit(cache=True)
+@_compiled
 def start_index(  # noqa: PLR0917
     midpoints, station, sensor_station, length, closed, start_min_x, start_back, start_ahead
 ):
@@ -622,7 +655,7 @@ def start_index(  # noqa: PLR0917
     return first
 
 
-@njit(cache=True)
+@_compiled
 def chain_nearest(  # noqa: PLR0917
     midpoints,
     station,
@@ -678,7 +711,7 @@ def chain_nearest(  # noqa: PLR0917
     return order[:count]
 
 
-@njit(cache=True)
+@_compiled
 def polyline_crosses(points, b0, b1):
     """``geometry.polyline_crosses``: the polyline properly crosses a segment ``b0 b1``."""
     p = len(points)
@@ -704,7 +737,7 @@ def polyline_crosses(points, b0, b1):
     return False
 
 
-@njit(cache=True)
+@_compiled
 def speed_profile(  # noqa: PLR0917
     points,
     s,
@@ -802,7 +835,7 @@ def speed_profile(  # noqa: PLR0917
     return out
 
 
-@njit(cache=True)
+@_compiled
 def _find_interval(t, k, x, prev):
     """scipy's ``_find_interval`` (extrapolating): l with t[l] <= x < t[l + 1], k <= l < n."""
     n = len(t) - k - 1
@@ -817,7 +850,7 @@ def _find_interval(t, k, x, prev):
     return l - 1
 
 
-@njit(cache=True)
+@_compiled
 def _spline_at(t, c, k, x, out, row, prev, work):  # noqa: PLR0917
     """``out[row]`` = the B-spline (t, c (n, 2), k) at x, as ``BSpline.__call__`` computes it.
 
@@ -853,7 +886,7 @@ def _spline_at(t, c, k, x, out, row, prev, work):  # noqa: PLR0917
     return ell
 
 
-@njit(cache=True)
+@_compiled
 def spline_path(t, c, k, count, spacing):
     """``spline.spline_through`` after the fit: points every ``spacing`` along the spline.
 
@@ -919,7 +952,7 @@ def spline_path(t, c, k, count, spacing):
     return path
 
 
-@njit(cache=True)
+@_compiled
 def arc_length(points):
     """``geometry.arc_length``: 0, then the running sum of the step lengths (``np.hypot``)."""
     n = len(points)
@@ -931,7 +964,7 @@ def arc_length(points):
     return s
 
 
-@njit(cache=True)
+@_compiled
 def crosses_boundary(points, boundary):
     """``polyline_crosses(points, boundary[:, 0], boundary[:, 1])`` for (e, 2, 2) edges."""
     if len(points) < 2 or len(boundary) == 0:
@@ -939,7 +972,7 @@ def crosses_boundary(points, boundary):
     return polyline_crosses(points, boundary[:, 0], boundary[:, 1])
 
 
-@njit(cache=True)
+@_compiled
 def ordered_midpoints(  # noqa: PLR0917
     used,
     midpoints,

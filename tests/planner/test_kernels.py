@@ -455,3 +455,31 @@ def test_kernels_are_deterministic() -> None:
     a = projector.project_around(points, 20.0, 35.0, 2.0)
     b = projector.project_around(points, 20.0, 35.0, 2.0)
     assert_array_equal(a.offset, b.offset)
+
+
+def test_import_without_a_writable_cache_directory() -> None:
+    """No cache directory numba can write: the kernels compile uncached, with a warning."""
+    import subprocess
+    import sys
+
+    script = """
+import warnings
+import numba.core.caching as caching
+
+def unwritable(self):
+    raise OSError("read-only")
+
+caching._CacheLocator.ensure_cache_path = unwritable  # every locator fails
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    from planner import kernels
+import numpy as np
+assert any("no writable cache" in str(w.message) for w in caught), caught
+assert kernels.arc_length(np.array([[0.0, 0.0], [3.0, 4.0]])).tolist() == [0.0, 5.0]
+print("ok")
+"""
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=False, timeout=300
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert done.stdout.strip() == "ok"
