@@ -44,10 +44,12 @@ Steps of ``reference_path_planning`` that work on cones in ``os_sensor``:
    cross.
 
 Written for speed (it runs per detection on a few dozen cones, where numpy's
-per-call overhead dominates): each step gathers a cone attribute once and
-reuses it, medians are taken with one sort (``median``, the same number as
-``numpy.median``), and a view with no virtual partner skips building and
-joining them.
+per-call overhead dominates): the pair table, the track estimate, the
+partners' selection, the edges from scipy's simplices, the bridge checks and
+the boundary edges are compiled loops (``planner.kernels``) with the numbers
+of the numpy code they replaced; medians are taken with one sort
+(``median``, the same number as ``numpy.median``), and a view with no
+virtual partner skips building and joining them.
 """
 
 from __future__ import annotations
