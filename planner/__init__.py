@@ -11,6 +11,9 @@ The seed's nodes as plain functions, and one class wiring them at their rates:
   (``speed_control``): steering and acceleration commands.
 - :class:`Autopilot` (``autopilot``): all of it, from messages and the frame tree.
 
+The per-detection loops of classification and planning are compiled with
+numba (``kernels``; compiled on first use, then loaded from numba's cache).
+
 The planner sees only what a real car's software sees: messages, the frame
 tree and the global path. It never imports ``sim``.
 """

@@ -44,10 +44,12 @@ Steps of ``reference_path_planning`` that work on cones in ``os_sensor``:
    cross.
 
 Written for speed (it runs per detection on a few dozen cones, where numpy's
-per-call overhead dominates): each step gathers a cone attribute once and
-reuses it, medians are taken with one sort (``median``, the same number as
-``numpy.median``), and a view with no virtual partner skips building and
-joining them.
+per-call overhead dominates): the pair table, the track estimate, the
+partners' selection, the edges from scipy's simplices, the bridge checks and
+the boundary edges are compiled loops (``planner.kernels``) with the numbers
+of the numpy code they replaced; medians are taken with one sort
+(``median``, the same number as ``numpy.median``), and a view with no
+virtual partner skips building and joining them.
 """
 
 from __future__ import annotations
@@ -59,8 +61,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import Delaunay, QhullError
 
+from planner import kernels
 from planner.config import MidlineConfig
-from planner.geometry import FloatArray, IntArray, StationAxis, station_difference
+from planner.geometry import FloatArray, IntArray, StationAxis
 
 BoolArray = NDArray[np.bool_]
 
@@ -169,7 +172,7 @@ class PairTable:
     Attributes:
         left: (a,) indices of the left cones.
         right: (b,) indices of the right cones.
-        dist: (a, b) distance [m].
+        dist: (a, b) distance [m] where ``same_stretch``, inf elsewhere (never used).
         same_stretch: (a, b) station gap <= ``max_station_gap``.
         span: (a, b) offset of the left cone minus offset of the right one [m].
         middle: (a, b) mean of the two offsets [m].
@@ -184,21 +187,19 @@ class PairTable:
 
 
 def pair_table(cones: ConeSet, config: MidlineConfig) -> PairTable:
-    """The (left, right) tables of :class:`PairTable`."""
-    left = (cones.side > 0).nonzero()[0]
-    right = (cones.side < 0).nonzero()[0]
-    pl, pr = cones.points.take(left, axis=0), cones.points.take(right, axis=0)
-    dist = np.hypot(np.subtract.outer(pl[:, 0], pr[:, 0]), np.subtract.outer(pl[:, 1], pr[:, 1]))
+    """The (left, right) tables of :class:`PairTable` (compiled: ``kernels.pair_table``)."""
     axis = cones.axis
-    gap = np.abs(
-        station_difference(
-            cones.station[right][None, :], cones.station[left][:, None], axis.length, axis.closed
+    return PairTable(
+        *kernels.pair_table(
+            cones.points,
+            cones.side,
+            cones.offset,
+            cones.station,
+            axis.length,
+            axis.closed,
+            config.max_station_gap,
         )
     )
-    ol, or_ = cones.offset[left], cones.offset[right]
-    span = np.subtract.outer(ol, or_)
-    middle = 0.5 * np.add.outer(ol, or_)
-    return PairTable(left, right, dist, gap <= config.max_station_gap, span, middle)
 
 
 @dataclass(frozen=True, slots=True)
@@ -230,26 +231,29 @@ def estimate_track(pairs: PairTable, config: MidlineConfig) -> TrackEstimate:
     Each cone's nearest valid partner (other side, span, length and station
     checks of ``find_bridges``) gives one sample of each: the offset
     difference and the mean offset. Fewer than ``min_width_samples`` samples
-    give the nominal width and the global path as the middle.
+    give the nominal width and the global path as the middle. Compiled:
+    ``kernels.estimate_track``.
     """
-    span = pairs.span
-    valid = (
-        pairs.same_stretch
-        & (span >= config.min_track_width)
-        & (span <= config.max_track_width)
-        & (pairs.dist <= config.max_bridge_length)
+    width, centre, measured = kernels.estimate_track(
+        pairs.dist,
+        pairs.same_stretch,
+        pairs.span,
+        pairs.middle,
+        config.min_track_width,
+        config.max_track_width,
+        config.max_bridge_length,
+        config.min_width_samples,
     )
-    rows = np.nonzero(valid.any(axis=1))[0]
-    cols = np.nonzero(valid.any(axis=0))[0]
-    if len(rows) == 0 or len(rows) + len(cols) < config.min_width_samples:
+    return track_estimate(width, centre, measured, config)
+
+
+def track_estimate(
+    width: float, centre: float, measured: bool, config: MidlineConfig
+) -> TrackEstimate:
+    """The estimate from a kernel's (width, centre, measured): nominal when not measured."""
+    if not measured:
         return TrackEstimate(config.nominal_track_width, 0.0, measured=False)
-    masked = np.where(valid, pairs.dist, np.inf)
-    width = valid.shape[1]
-    # Flat indices of each row's nearest valid partner, then each column's.
-    picks = np.concatenate(
-        [rows * width + masked.argmin(axis=1)[rows], masked.argmin(axis=0)[cols] * width + cols]
-    )
-    return TrackEstimate(median(span.take(picks)), median(pairs.middle.take(picks)), measured=True)
+    return TrackEstimate(float(width), float(centre), measured=True)
 
 
 def median(values: FloatArray) -> float:
@@ -282,14 +286,21 @@ def virtual_partners(
     Returns:
         The virtual cones (possibly none).
     """
-    close = pairs.same_stretch & (pairs.dist <= config.partner_radius)
-    near = np.zeros(len(cones), dtype=bool)
-    near[pairs.left] = close.any(axis=1)
-    near[pairs.right] = close.any(axis=0)
-    # On its boundary line: a stray or misclassified cone gets no partner.
-    boundary = np.abs(track.boundary_offset(cones)) <= config.partner_offset_tolerance
-    need = ~near & boundary
-    if not need.any():
+    # Nobody across within ``partner_radius``, and on its boundary line (a
+    # stray or misclassified cone gets no partner): compiled.
+    need = kernels.partners_needed(
+        cones.side,
+        cones.offset,
+        pairs.left,
+        pairs.right,
+        pairs.same_stretch,
+        pairs.dist,
+        config.partner_radius,
+        track.centre,
+        track.width,
+        config.partner_offset_tolerance,
+    )
+    if len(need) == 0:
         return _no_cones(cones.axis)
     alone = cones.select(need)
     t, side = alone.tangent, alone.side
@@ -334,16 +345,9 @@ def delaunay_edges(points: FloatArray) -> IntArray:
         tri = Delaunay(points)
     except QhullError:
         return np.zeros((0, 2), dtype=np.intp)
-    # Each vertex's neighbours (scipy's CSR lists, in their order); the
-    # lists hold every edge twice, i < j keeps it once. Measured faster than
-    # deduplicating the edges of ``tri.simplices`` in the same order.
-    indptr, indices = tri.vertex_neighbor_vertices
-    rows = np.repeat(np.arange(n), indptr[1:] - indptr[:-1])
-    keep = rows < indices
-    edges = np.empty((int(np.count_nonzero(keep)), 2), dtype=np.intp)
-    edges[:, 0] = rows[keep]
-    edges[:, 1] = indices[keep]
-    return edges
+    # Each vertex's neighbours j > i, in the order of scipy's
+    # ``vertex_neighbor_vertices`` lists, built from the simplices (compiled).
+    return kernels.delaunay_edges(tri.simplices, n)
 
 
 def find_bridges(
@@ -357,53 +361,38 @@ def find_bridges(
         config: the checks.
         track: the width in view; its width is checked only when measured.
     """
-    i, j = edges[:, 0], edges[:, 1]
-    side_i = cones.side[i]
-    across = side_i != cones.side[j]
-    i, j = i[across], j[across]
-    swap = side_i[across] < 0
-    left = np.where(swap, j, i)
-    right = np.where(swap, i, j)
-    start = cones.points.take(left, axis=0)
-    vec = cones.points.take(right, axis=0) - start
-    length = np.hypot(vec[:, 0], vec[:, 1])
-    span = cones.offset[left] - cones.offset[right]
-    station = cones.station[left]
-    ds = cones.axis.difference(cones.station[right], station)
-    valid = (
-        (span >= config.min_track_width)
-        & (span <= config.max_track_width)
-        & (length <= config.max_bridge_length)
-        & (np.abs(ds) <= config.max_station_gap)
+    check_width = track is not None and track.measured
+    left, right, length, valid, used, midpoints, station = kernels.find_bridges(
+        edges,
+        cones.points,
+        cones.side,
+        cones.offset,
+        cones.station,
+        cones.virtual,
+        cones.axis.length,
+        cones.axis.closed,
+        config.min_track_width,
+        config.max_track_width,
+        config.max_bridge_length,
+        config.max_station_gap,
+        check_width,
+        track.width if track is not None else 0.0,
+        config.width_tolerance,
+        config.bridge_selection == "shortest",
     )
-    if cones.virtual.any():
-        valid &= ~(cones.virtual[left] & cones.virtual[right])
-    if track is not None and track.measured:
-        valid &= np.abs(span - track.width) <= config.width_tolerance
-    used = valid.copy()
-    if config.bridge_selection == "shortest" and valid.any():
-        best = np.full(len(cones), np.inf)
-        shortest = length[valid]
-        np.minimum.at(best, left[valid], shortest)
-        np.minimum.at(best, right[valid], shortest)
-        used = valid & ((length <= best[left]) | (length <= best[right]))
-    return Bridges(
-        left=left,
-        right=right,
-        length=length,
-        valid=valid,
-        used=used,
-        midpoints=start + 0.5 * vec,
-        station=station + 0.5 * ds,
-    )
+    return Bridges(left, right, length, valid, used, midpoints, station)
 
 
 def boundary_edges(cones: ConeSet, edges: IntArray, config: MidlineConfig) -> IntArray:
     """Step 4: same-side edges (e, 2) that run along one boundary of one stretch of track."""
-    i, j = edges[:, 0], edges[:, 1]
-    along = cones.side[i] == cones.side[j]
-    i, j = i[along], j[along]
-    along[along] = (np.abs(cones.offset[i] - cones.offset[j]) < config.min_track_width) & (
-        cones.station_gap(i, j) <= config.max_station_gap
+    rows = kernels.boundary_edges(
+        edges,
+        cones.side,
+        cones.offset,
+        cones.station,
+        cones.axis.length,
+        cones.axis.closed,
+        config.min_track_width,
+        config.max_station_gap,
     )
-    return edges.compress(along, axis=0)
+    return edges.take(rows, axis=0)

@@ -32,9 +32,9 @@ the bridges such a cone would make.
 Cones with a non-finite coordinate are dropped and counted (messages do not
 validate their numbers; ``localization.messages``).
 
-Written for speed (it runs per detection): step 2's two projections share one
-k-d tree query (``PathProjector.project_around``), and the default settings
-are built once.
+Written for speed (it runs per detection): step 2's projections are compiled
+searches (``PathProjector.project_around``, ``planner.kernels``), and the
+default settings are built once.
 """
 
 from __future__ import annotations

@@ -9,48 +9,47 @@ for a point ``p`` and a segment from ``a`` with direction ``d``::
 The signed offset is ``side / |d|`` (distance from the segment's line, + left)
 and the station is the arc length from the path's first point to the foot.
 
-Finding the nearest segment exactly without testing all of them: the foot of
-the nearest segment lies on it, so that segment's midpoint is within
-``d* + L_max / 2`` of ``p``, where ``d*`` is the nearest-segment distance and
-``L_max`` the longest segment; ``d*`` is at most the distance to the nearest
-midpoint. A k-d tree over the midpoints returns the k nearest; a point whose
-k-th neighbour is not beyond that bound is tested against every segment.
+Finding the nearest segment exactly without testing all of them: the
+segments are grouped 16 at a time (consecutive along the path) into
+bounding circles; no segment of a circle (x, y, r) is nearer to ``p`` than
+``|p - (x, y)| - r``. A circle whose bound exceeds the best score found so
+far (plus 1e-9 m for rounding) is skipped. Ties of the score go to the
+nearer segment midpoint, then to the lower index.
 
 A path that passes the same place more than once (the skidpad's centre, a
 crossing) makes "the nearest segment" ambiguous. ``project`` therefore takes
 an optional station window [lo, hi] (wrapped on a closed path) and a penalty:
 segments outside the window count as ``penalty`` metres farther. Near-ties go
 to the window's stretch; a point clearly nearest another stretch still
-projects there. The same bound holds with distances plus penalties.
+projects there. The same bound holds with distances plus penalties: the
+circles holding a window segment are searched first (nearest bound first),
+the others only when the best score reaches ``penalty``, which for a cone
+near the current stretch it does not.
 
 Written for speed (the planner runs this per detection, on a few dozen
 points, where numpy's per-call overhead of about a microsecond dominates):
-the distances to the k candidate segments do not depend on the window, so
-``PathProjector.project_around`` queries the k-d tree once for the cones and
-the sensor and picks the sensor's unwindowed and everyone's windowed segment
-from the same candidates, whose table rows are gathered with one ``take``
-(several times faster than ``[]`` on 2-D arrays). ``polyline_crosses`` tests
-only the path segments that straddle a boundary edge's line instead of every
-pair. The results are the same numbers as the straightforward code (same
-operations per element; ``tests/planner/test_speedups.py``).
+the search and the projection's numbers are compiled loops
+(``planner.kernels.nearest_segments``, ``project_rows``; they replaced a k-d
+tree over the midpoints plus numpy glue, twice the time), and so is
+``polyline_crosses``, which tests only the path segments that straddle a
+boundary edge's line and stops at the first crossing. The results are the
+numbers of the straightforward code (same operations per element;
+``tests/planner/test_kernels.py`` keeps the k-d tree version as the reference).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 from localization.global_path import GlobalPath
+from planner import kernels
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
-
-_CANDIDATES = (8, 32)  # nearest segment midpoints tested per point, first then second pass
 
 
 @dataclass(frozen=True, slots=True)
@@ -85,19 +84,7 @@ class Projection:
         )
 
 
-class _Candidates(NamedTuple):
-    """Candidate segments (n, k) of n points, with the foot parameter and squared distance.
-
-    ``dist`` is the distance to each candidate's midpoint (None when every
-    segment is a candidate), ``segment`` the candidates' indices and ``rows``
-    their rows (n, k, 9) of the segment table.
-    """
-
-    dist: FloatArray | None
-    segment: IntArray
-    rows: FloatArray
-    t: FloatArray
-    d2: FloatArray
+_BLOCK = 16  # segments per bounding circle of the search (``kernels.nearest_segments``)
 
 
 # Columns of the segment table: start x, y, direction x, y, 1 / length^2,
@@ -106,7 +93,7 @@ _SX, _SY, _DX, _DY, _INV_LEN2, _MID_STATION, _HALF_LENGTH, _LENGTH, _STATION0 = 
 
 
 class PathProjector:
-    """Nearest-segment projection onto a global path, with a k-d tree.
+    """Nearest-segment projection onto a global path (compiled search over bounding circles).
 
     Args:
         path: the global path in ``reference``; a closed path includes the
@@ -127,8 +114,8 @@ class PathProjector:
         self._half_length = 0.5 * self._length
         self._station0 = np.concatenate([[0.0], np.cumsum(self._length)[:-1]])
         self._mid_station = self._station0 + self._half_length
-        self._tree = cKDTree(self._start + 0.5 * self._delta)
         self._half_max = 0.5 * float(self._length.max())
+        self._blocks = _bounding_circles(self._start, self._delta)
         # One row per segment (columns ``_SX`` ...), gathered with a single
         # ``take`` per query.
         self._table = np.column_stack(
@@ -169,8 +156,8 @@ class PathProjector:
                 comparing [m]: inf searches the window only (the whole path
                 if no segment is in it), 0 ignores the window.
         """
-        p = np.asarray(points, dtype=float).reshape(-1, 2)
-        return self._project(p, self._candidates(p), self._preference(window, penalty))
+        p = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
+        return self._project(p, self._preference(window, penalty))
 
     def project_around(
         self,
@@ -185,7 +172,7 @@ class PathProjector:
         The same as ``project(points, (centre - back, centre + ahead), penalty)``
         where ``centre`` is None is the last point's station on the whole path
         (``project(points[-1:]).station[0]``); ``penalty <= 0`` projects with no
-        window. One k-d tree query serves both projections.
+        window.
 
         Args:
             points: (n, 2) [m], n >= 1; the last row is the window's origin.
@@ -194,14 +181,13 @@ class PathProjector:
             penalty: see :meth:`project`.
             centre: the window's origin station [m], if known.
         """
-        p = np.asarray(points, dtype=float).reshape(-1, 2)
-        found = self._candidates(p)
+        p = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
         prefer = None
         if penalty > 0.0:
             if centre is None:
-                centre = self._last_station(p, found)
+                centre = float(self._project(p[-1:], None).station[0])
             prefer = self._preference((centre - back, centre + ahead), penalty)
-        return self._project(p, found, prefer)
+        return self._project(p, prefer)
 
     @property
     def axis(self) -> StationAxis:
@@ -223,116 +209,40 @@ class PathProjector:
             return None
         return (0.5 * (lo + hi), 0.5 * (hi - lo), penalty)
 
-    def _last_station(self, p: FloatArray, found: _Candidates) -> float:
-        """Station [m] of the last point's nearest segment on the whole path (no window)."""
-        dist = found.dist
-        if dist is not None and dist[-1, -1] <= dist[-1, 0] + self._half_max:
-            return float(self.project(p[-1:]).station[0])  # unsure: the full search
-        best = int(found.d2[-1].argmin())
-        row = found.rows[-1, best]
-        return float(row[_STATION0] + found.t[-1, best] * row[_LENGTH])
+    def _project(self, p: FloatArray, prefer: tuple[float, float, float] | None) -> Projection:
+        """The projections of ``p`` (contiguous (n, 2)) with the window ``prefer``.
 
-    def _project(
-        self, p: FloatArray, found: _Candidates, prefer: tuple[float, float, float] | None
-    ) -> Projection:
-        """The projections of ``p`` given its first-pass candidates."""
-        seg, t, d2 = self._nearest(p, found, prefer)
-        row = self._table.take(seg, axis=0)
-        a, d, length = row[:, _SX : _SY + 1], row[:, _DX : _DY + 1], row[:, _LENGTH]
-        rel = p - a
-        cross = d[:, 0] * rel[:, 1] - d[:, 1] * rel[:, 0]
-        return Projection(
-            foot=a + t[:, None] * d,
-            segment=seg,
-            station=row[:, _STATION0] + t * length,
-            offset=cross / length,
-            tangent=d / length[:, None],
-            distance=np.sqrt(d2),
+        ``prefer`` is the window's (centre, half width, penalty) [m], None for
+        no window. Compiled: the search (``kernels.nearest_segments``) and the
+        projection's numbers (``kernels.project_rows``).
+        """
+        centre, half, penalty = (0.0, 0.0, 0.0) if prefer is None else prefer
+        seg, t, d2 = kernels.nearest_segments(
+            p,
+            self._table,
+            self._blocks,
+            _BLOCK,
+            prefer is not None,
+            centre,
+            half,
+            penalty,
+            self.length,
+            self.closed,
         )
+        foot, station, offset, tangent, distance = kernels.project_rows(p, seg, t, d2, self._table)
+        return Projection(foot, seg, station, offset, tangent, distance)
 
-    def _candidates(self, p: FloatArray, wanted: int = _CANDIDATES[0]) -> _Candidates:
-        """The segments of the ``wanted`` nearest midpoints of each point (k-d tree)."""
-        k = min(wanted, len(self._length))
-        dist, index = self._tree.query(p, k=k)
-        index = np.asarray(index, dtype=np.intp).reshape(len(p), k)
-        dist = np.asarray(dist, dtype=float).reshape(len(p), k)
-        if k == len(self._length):
-            dist = None  # every segment is a candidate: the result is sure
-        return self._measure(p, dist, index, self._table.take(index, axis=0))
 
-    @staticmethod
-    def _measure(
-        p: FloatArray, dist: FloatArray | None, index: IntArray, rows: FloatArray
-    ) -> _Candidates:
-        """Foot parameter and squared distance of each point to its candidate segments."""
-        rx = p[:, 0, None] - rows[..., _SX]
-        ry = p[:, 1, None] - rows[..., _SY]
-        dx, dy = rows[..., _DX], rows[..., _DY]
-        t = (rx * dx + ry * dy) * rows[..., _INV_LEN2]
-        np.maximum(t, 0.0, out=t)  # clip to [0, 1]
-        np.minimum(t, 1.0, out=t)
-        gx, gy = rx - t * dx, ry - t * dy
-        return _Candidates(dist, index, rows, t, gx * gx + gy * gy)
-
-    def _nearest(
-        self, p: FloatArray, found: _Candidates, prefer: tuple[float, float, float] | None
-    ) -> tuple[IntArray, FloatArray, FloatArray]:
-        """Each point's segment of least distance + penalty: (segment, t, squared distance).
-
-        ``found`` holds the first pass's candidates; ``prefer`` is the window's
-        (centre, half width, penalty) [m], None for no window.
-
-        The k nearest midpoints are candidates. A point is sure when its k-th
-        midpoint is farther than ``first + L_max / 2``, where ``first`` is the
-        least candidate midpoint distance + extra: the best segment's distance
-        is at most ``first``, so its midpoint is within that bound (module
-        docstring). Unsure points are tried again with a larger k, then
-        against every segment.
-        """
-        seg, t, d2, unsure = self._pick(found, prefer)
-        todo = unsure.nonzero()[0] if unsure is not None else None
-        for wanted in _CANDIDATES[1:]:
-            if todo is None or len(todo) == 0:
-                return seg, t, d2
-            found = self._candidates(p[todo], wanted)
-            seg[todo], t[todo], d2[todo], unsure = self._pick(found, prefer)
-            todo = todo[unsure] if unsure is not None else None
-        if todo is not None and len(todo):
-            n_seg = len(self._length)
-            every = np.broadcast_to(np.arange(n_seg), (len(todo), n_seg))
-            rows = np.broadcast_to(self._table, (len(todo), *self._table.shape))
-            found = self._measure(p[todo], None, every, rows)
-            seg[todo], t[todo], d2[todo], _ = self._pick(found, prefer)
-        return seg, t, d2
-
-    def _pick(
-        self, found: _Candidates, prefer: tuple[float, float, float] | None
-    ) -> tuple[IntArray, FloatArray, FloatArray, NDArray[np.bool_] | None]:
-        """The best candidate of each point: segment, t, squared distance, and whether unsure.
-
-        The unsure mask is None when every segment was a candidate.
-        """
-        cost = self._penalty(found.rows, prefer)
-        d2 = found.d2
-        n, k = d2.shape
-        best = (d2 if cost is None else np.sqrt(d2) + cost).argmin(axis=1)
-        best += np.arange(0, n * k, k)  # flat index of (row, best)
-        unsure = None
-        if found.dist is not None:
-            dist = found.dist
-            first = dist[:, 0] if cost is None else (dist + cost).min(axis=1)
-            unsure = dist[:, -1] <= first + self._half_max
-        return found.segment.take(best), found.t.take(best), d2.take(best), unsure
-
-    def _penalty(
-        self, rows: FloatArray, prefer: tuple[float, float, float] | None
-    ) -> FloatArray | None:
-        """(n, k) penalty of candidate segments outside the preferred window [m]."""
-        if prefer is None:
-            return None
-        centre, half, penalty = prefer
-        away = np.abs(self._axis.difference(rows[..., _MID_STATION], centre))
-        return np.where(away <= half + rows[..., _HALF_LENGTH], 0.0, penalty)
+def _bounding_circles(start: FloatArray, delta: FloatArray) -> FloatArray:
+    """(b, 3) circles (x, y, r) holding each ``_BLOCK`` consecutive segments, r padded by 1e-9."""
+    ends = np.concatenate([start, start + delta], axis=1).reshape(-1, 4)
+    circles = []
+    for first in range(0, len(start), _BLOCK):
+        xy = ends[first : first + _BLOCK].reshape(-1, 2)
+        centre = 0.5 * (xy.min(axis=0) + xy.max(axis=0))
+        radius = float(np.hypot(*(xy - centre).T).max())
+        circles.append([centre[0], centre[1], radius * (1.0 + 1e-12) + 1e-9])
+    return np.array(circles, dtype=float).reshape(-1, 3)
 
 
 @dataclass(frozen=True, slots=True)
@@ -395,40 +305,30 @@ def segments_cross(
 def polyline_crosses(points: FloatArray, b0: FloatArray, b1: FloatArray) -> bool:
     """Whether the polyline (p, 2) properly crosses any segment ``b0 b1`` (k, 2).
 
-    ``np.any(segments_cross(points[:-1], points[1:], b0, b1))``, computed in two
-    steps for speed: first the side of every polyline point of every
-    segment's line (one (p, k) matrix, built in place, consecutive points in
-    consecutive rows), which leaves the few polyline segments that straddle a
-    line (found with one flat ``nonzero``); only those are tested against the
-    line through the other segment.
+    ``np.any(segments_cross(points[:-1], points[1:], b0, b1))``, compiled
+    (``kernels.polyline_crosses``): for each segment's line, the side of each
+    polyline point; only a polyline step that straddles the line is tested
+    against the line through the other segment, and the first crossing ends
+    the search.
     """
     if len(points) < 2 or len(b0) == 0:
         return False
-    db = b1 - b0
-    cb = db[:, 0] * b0[:, 1] - db[:, 1] * b0[:, 0]
-    side = np.multiply.outer(points[:, 1], db[:, 0])  # (p, k): _orientation transposed
-    side -= np.multiply.outer(points[:, 0], db[:, 1])
-    side -= cb
-    hits = np.flatnonzero(side[:-1] * side[1:] < 0.0)
-    if len(hits) == 0:
-        return False
-    j, k = np.divmod(hits, len(cb))
-    a0, a1 = points.take(j, axis=0), points.take(j + 1, axis=0)
-    da = a1 - a0
-    ca = da[:, 0] * a0[:, 1] - da[:, 1] * a0[:, 0]
-    e0, e1 = b0.take(k, axis=0), b1.take(k, axis=0)
-    o0 = da[:, 0] * e0[:, 1] - da[:, 1] * e0[:, 0] - ca
-    o1 = da[:, 0] * e1[:, 1] - da[:, 1] * e1[:, 0] - ca
-    return bool((o0 * o1 < 0.0).any())
+    return bool(
+        kernels.polyline_crosses(
+            np.ascontiguousarray(points, dtype=float),
+            np.ascontiguousarray(b0, dtype=float),
+            np.ascontiguousarray(b1, dtype=float),
+        )
+    )
 
 
 def arc_length(points: FloatArray) -> FloatArray:
-    """Cumulative arc length of an (n, 2) polyline, starting at 0 [m]; shape (max(n, 1),)."""
-    n = len(points)
-    s = np.zeros(max(n, 1))
-    if n > 1:
-        d = points[1:] - points[:-1]
-        np.cumsum(np.hypot(d[:, 0], d[:, 1]), out=s[1:])
+    """Cumulative arc length of an (n, 2) polyline, starting at 0 [m]; shape (max(n, 1),).
+
+    The running sum of ``np.hypot`` of the steps, as ``np.cumsum`` adds
+    (compiled: ``kernels.arc_length``).
+    """
+    s: FloatArray = kernels.arc_length(np.ascontiguousarray(points, dtype=float).reshape(-1, 2))
     return s
 
 

@@ -25,8 +25,11 @@ plan reports ``PlanStatus.FALLBACK`` with the reason; with nothing to carry
 forward it is ``PlanStatus.FAILED`` with an empty path.
 
 Written for speed (per detection): the default settings are built once, and
-step 6 tests the path against the boundary with ``polyline_crosses``, which
-only examines the path segments that straddle a boundary edge's line.
+the steps' loops are compiled (``planner.kernels``: step 2 in one call, the
+bridges, the ordering, the spline's sampling, step 6's crossing test, which
+only examines the path segments that straddle a boundary edge's line, and
+the speed profile), with the numbers of the numpy code they replaced
+(``tests/planner/test_kernels.py``). Step 3's triangulation is scipy's.
 """
 
 from __future__ import annotations
@@ -39,6 +42,7 @@ from numpy.typing import NDArray
 
 from localization.frames import LATEST, Buffer, TransformError
 from localization.messages import FRAME_OS_SENSOR, Header
+from planner import kernels
 from planner.bridges import (
     Bridges,
     ConeSet,
@@ -46,14 +50,13 @@ from planner.bridges import (
     TrackEstimate,
     boundary_edges,
     delaunay_edges,
-    estimate_track,
     find_bridges,
-    pair_table,
+    track_estimate,
     virtual_partners,
 )
 from planner.classify import LEFT, RIGHT, ClassifiedCones
 from planner.config import MidlineConfig, SpeedProfileConfig
-from planner.geometry import FloatArray, arc_length, polyline_crosses
+from planner.geometry import FloatArray, arc_length
 from planner.messages import BridgeLines, LocalPath, Midpoints, Waypoints
 from planner.ordering import ordered_midpoints
 from planner.speed_profile import speed_profile
@@ -169,14 +172,15 @@ def cones_to_sensor(
 
 def in_view(cones: ConeSet, config: MidlineConfig) -> NDArray[np.bool_]:
     """Step 2a: (n,) mask of the cones in range and at a boundary's distance from the path."""
-    x, y = cones.points[:, 0], cones.points[:, 1]
-    offset = np.abs(cones.offset)
-    return (
-        (x >= config.min_x)
-        & (np.hypot(x, y) <= config.max_range)
-        & (offset >= config.min_boundary_offset)
-        & (offset <= config.max_boundary_offset)
+    keep: NDArray[np.bool_] = kernels.in_view(
+        cones.points,
+        cones.offset,
+        config.min_x,
+        config.max_range,
+        config.min_boundary_offset,
+        config.max_boundary_offset,
     )
+    return keep
 
 
 def boundary_cones(
@@ -184,19 +188,37 @@ def boundary_cones(
 ) -> tuple[ConeSet, PairTable, TrackEstimate, int]:
     """Step 2: the cones that may bound the track, their pair table and the track estimate.
 
+    ``in_view``, ``pair_table`` and ``estimate_track``; when the track is
+    measured, the cones more than ``boundary_tolerance`` inside their boundary
+    line are dropped and the pair table rebuilt (the estimate stays). One
+    compiled call (``kernels.boundary_cones``).
+
     Returns:
         The kept cones, their pair table, the width and middle in view, and
         how many cones were dropped.
     """
-    keep = in_view(cones, config)
-    real = cones if keep.all() else cones.select(keep)
-    pairs = pair_table(real, config)
-    track = estimate_track(pairs, config)
-    if track.measured:
-        on_boundary = track.boundary_offset(real) >= -config.boundary_tolerance
-        if not on_boundary.all():
-            real = real.select(on_boundary)
-            pairs = pair_table(real, config)
+    axis = cones.axis
+    keep, left, right, dist, same, span, middle, width, centre, measured = kernels.boundary_cones(
+        cones.points,
+        cones.side,
+        cones.offset,
+        cones.station,
+        axis.length,
+        axis.closed,
+        config.min_x,
+        config.max_range,
+        config.min_boundary_offset,
+        config.max_boundary_offset,
+        config.max_station_gap,
+        config.min_track_width,
+        config.max_track_width,
+        config.max_bridge_length,
+        config.min_width_samples,
+        config.boundary_tolerance,
+    )
+    real = cones if len(keep) == len(cones) else cones.select(keep)
+    pairs = PairTable(left, right, dist, same, span, middle)
+    track = track_estimate(width, centre, measured, config)
     return real, pairs, track, len(cones) - len(real)
 
 
@@ -225,7 +247,7 @@ def check_path(
     start = float(np.hypot(path[0, 0], path[0, 1]))
     if start > config.max_start_distance:
         return f"path starts {start:.2f} m away (max {config.max_start_distance} m)"
-    if len(boundary) and polyline_crosses(path, boundary[:, 0], boundary[:, 1]):
+    if kernels.crosses_boundary(path, boundary):  # polyline_crosses, compiled
         return "path crosses a track boundary"
     return ""
 

@@ -18,17 +18,19 @@ one stretch of track, using each midpoint's station along the global path
 
 The chain stops when no midpoint qualifies.
 
-Written for speed: the step matrix is built with a few numpy calls and the
-walk itself is plain Python over each row's allowed steps, nearest first.
-Ranking only the allowed steps (one ``lexsort`` of the flat nonzeros) was
-measured faster on its own but slower inside the full planning step, where
-every extra numpy routine runs cold: the row ``argsort`` stays.
+Written for speed: the start and the walk are compiled loops
+(``kernels.start_index``, ``kernels.chain_nearest``) that compute each step's
+distance and station advance when the walk looks at it, instead of a step
+matrix, a row ``argsort`` and a Python walk. The nearest unvisited allowed
+step, lowest index of equals, is the one the stable row ``argsort`` ranked
+first (``tests/planner/test_speedups.py`` keeps that walk as the reference).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from planner import kernels
 from planner.bridges import Bridges
 from planner.config import MidlineConfig
 from planner.geometry import FloatArray, IntArray, StationAxis
@@ -42,18 +44,17 @@ def start_index(
     config: MidlineConfig,
 ) -> int | None:
     """Index of the nearest midpoint in front of the sensor, or None."""
-    if len(midpoints) == 0:
-        return None
-    ahead = axis.difference(station, sensor_station)
-    x = midpoints[:, 0]
-    ok = (
-        (x > config.start_min_x)
-        & (ahead >= -config.start_station_back)
-        & (ahead <= config.start_station_ahead)
+    first = kernels.start_index(
+        midpoints,
+        station,
+        sensor_station,
+        axis.length,
+        axis.closed,
+        config.start_min_x,
+        config.start_station_back,
+        config.start_station_ahead,
     )
-    if not ok.any():
-        return None
-    return int(np.where(ok, np.hypot(x, midpoints[:, 1]), np.inf).argmin())
+    return None if first < 0 else int(first)
 
 
 def chain_nearest(
@@ -64,42 +65,19 @@ def chain_nearest(
     config: MidlineConfig,
 ) -> IntArray:
     """Indices of the chain of nearest neighbours from ``first`` (see module docstring)."""
-    x, y = midpoints[:, 0], midpoints[:, 1]
-    dist = np.hypot(np.subtract.outer(x, x), np.subtract.outer(y, y))
-    advance = axis.difference(station[None, :], station[:, None])
-    step = np.where(
-        (dist <= config.max_step)
-        & (advance <= config.max_station_step)
-        & (advance >= -config.station_back_tolerance)
-        & (advance >= config.min_step_advance * dist),
-        dist,
-        np.inf,
+    order: IntArray = kernels.chain_nearest(
+        midpoints,
+        station,
+        first,
+        axis.length,
+        axis.closed,
+        config.max_step,
+        config.max_station_step,
+        config.station_back_tolerance,
+        config.min_step_advance,
+        config.min_midpoint_spacing,
     )
-    # Each row's allowed steps, nearest first, as Python lists (only as many
-    # columns as the longest row allows); the walk itself is plain Python,
-    # cheaper than a numpy call per step for the few dozen midpoints in view.
-    allowed = np.isfinite(step).sum(axis=1)
-    ranked = step.argsort(axis=1, kind="stable")[:, : int(allowed.max())]
-    lengths = step[np.arange(len(step))[:, None], ranked].tolist()
-    candidates = ranked.tolist()
-    counts = allowed.tolist()
-    visited = [False] * len(midpoints)
-    visited[first] = True
-    order = [first]
-    current = first
-    while True:
-        row = candidates[current]
-        for k in range(counts[current]):  # the nearest unvisited allowed step
-            if not visited[row[k]]:
-                break
-        else:
-            break
-        visited[row[k]] = True
-        if lengths[current][k] < config.min_midpoint_spacing:
-            continue
-        current = row[k]
-        order.append(current)
-    return np.asarray(order, dtype=np.intp)
+    return order
 
 
 def order_midpoints(
@@ -130,9 +108,24 @@ def order_midpoints(
 def ordered_midpoints(
     bridges: Bridges, sensor_station: float, axis: StationAxis, config: MidlineConfig
 ) -> FloatArray:
-    """The used bridges' midpoints (m, 2) [m], in driving order from the one in front."""
-    used = bridges.used.nonzero()[0]
-    order = order_midpoints(
-        bridges.midpoints.take(used, axis=0), bridges.station[used], sensor_station, axis, config
+    """The used bridges' midpoints (m, 2) [m], in driving order from the one in front.
+
+    ``order_midpoints`` on the used bridges, in one compiled call.
+    """
+    ordered: FloatArray = kernels.ordered_midpoints(
+        bridges.used,
+        bridges.midpoints,
+        bridges.station,
+        sensor_station,
+        axis.length,
+        axis.closed,
+        config.start_min_x,
+        config.start_station_back,
+        config.start_station_ahead,
+        config.max_step,
+        config.max_station_step,
+        config.station_back_tolerance,
+        config.min_step_advance,
+        config.min_midpoint_spacing,
     )
-    return bridges.midpoints.take(used[order], axis=0)
+    return ordered

@@ -13,18 +13,22 @@ spline; their spacing is off by the polyline's chord error, relative
 errors), the midpoints are joined by straight lines instead (the seed's
 fallback).
 
-Written for speed: the fitted spline is evaluated as one
-``scipy.interpolate.BSpline`` (``construct_fast``, both coordinates per call)
-instead of ``splev``, which evaluates a parametric spline one coordinate at a
-time with its checks each time; the numbers are the same (both evaluate the
-B-spline basis as FITPACK's ``fpbspl`` does; checked bitwise by a test).
+Written for speed: after ``splprep``, the sampling, its arc length, the
+stations, ``numpy.interp`` and the second evaluation run in one compiled
+loop (``planner.kernels.spline_path``), which evaluates the spline the way
+scipy's ``BSpline`` and ``splev`` do (interval search, de Boor's recursion
+for the basis, the sum in basis order) and interpolates the way
+``numpy.interp`` does: the same numbers, checked bit for bit against
+``splev`` and against the numpy steps by tests. A path whose length is not
+a positive finite number has no spline path (numpy's ``arange`` would fail).
 """
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.interpolate import BSpline, splprep
+from scipy.interpolate import splprep
 
+from planner import kernels
 from planner.config import MidlineConfig
 from planner.geometry import FloatArray, arc_length, resample_polyline
 
@@ -43,19 +47,18 @@ def spline_through(points: FloatArray, config: MidlineConfig) -> FloatArray | No
         ((knots, coefficients, k), _), _, ier, _ = splprep(
             points.T, s=m * config.spline_sigma**2, k=degree, full_output=True
         )
-        if ier > 0:
-            return None
-        spline = BSpline.construct_fast(knots, np.column_stack(coefficients), k)
-        u = np.arange(count) * (1.0 / (count - 1))  # np.linspace(0, 1, count), cheaper
-        u[-1] = 1.0
-        s = arc_length(spline(u))
-        stations = np.arange(0.0, float(s[-1]), config.spacing)
-        if s[-1] - stations[-1] > 1e-9:
-            stations = np.concatenate([stations, s[-1:]])
-        path: FloatArray = spline(np.interp(stations, s, u))
     except (ValueError, TypeError):
         return None
-    return path if np.isfinite(path).all() else None
+    if ier > 0:
+        return None
+    path: FloatArray = kernels.spline_path(
+        np.ascontiguousarray(knots, dtype=float),
+        np.column_stack(coefficients).astype(float, copy=False),
+        int(k),
+        count,
+        float(config.spacing),
+    )
+    return path if len(path) else None
 
 
 def fit_path(midpoints: FloatArray, config: MidlineConfig) -> FloatArray:

@@ -19,7 +19,7 @@ from localization.frames import Buffer, TransformStamped
 from localization.global_path import global_path_from_centreline
 from localization.messages import Header
 from localization.pose import Pose2D
-from planner import MidlineConfig
+from planner import MidlineConfig, kernels
 from planner.bridges import ConeSet, delaunay_edges, median
 from planner.classify import ClassifiedCones
 from planner.geometry import (
@@ -141,7 +141,9 @@ def test_median_is_numpy_median() -> None:
     for n in range(1, 40):
         values = np.round(rng.normal(0.0, 2.0, n), 1 if n % 3 else 6)
         assert median(values) == float(np.median(values))
+        assert kernels.median(values) == float(np.median(values))  # the compiled one
     assert math.isnan(median(np.array([1.0, math.nan, 2.0])))
+    assert math.isnan(kernels.median(np.array([1.0, math.nan, 2.0])))
 
 
 def test_arc_length_small_and_random() -> None:
