@@ -139,28 +139,22 @@ def segment_crossing(
         The fraction u in [0, 1] along p0 -> p1 at the crossing, or None.
     """
     return segment_crossing_xy(
-        float(p0[0]),
-        float(p0[1]),
-        float(p1[0]),
-        float(p1[1]),
-        float(a[0]),
-        float(a[1]),
-        float(b[0]),
-        float(b[1]),
+        (float(p0[0]), float(p0[1])),
+        (float(p1[0]), float(p1[1])),
+        (float(a[0]), float(a[1]), float(b[0]), float(b[1])),
     )
 
 
 def segment_crossing_xy(
-    p0x: float,
-    p0y: float,
-    p1x: float,
-    p1y: float,
-    ax: float,
-    ay: float,
-    bx: float,
-    by: float,
+    p0: tuple[float, float], p1: tuple[float, float], line: tuple[float, float, float, float]
 ) -> float | None:
-    """:func:`segment_crossing` on plain floats (the same operations; every physics step)."""
+    """:func:`segment_crossing` on plain floats, the line as (ax, ay, bx, by).
+
+    The same operations in the same order (every physics step).
+    """
+    p0x, p0y = p0
+    p1x, p1y = p1
+    ax, ay, bx, by = line
     dx, dy = p1x - p0x, p1y - p0y
     ex, ey = bx - ax, by - ay
     denom = dx * ey - dy * ex

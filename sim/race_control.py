@@ -131,8 +131,10 @@ class RaceControl:
         self._corners_list = [(hl, hw), (hl, -hw), (-hl, hw), (-hl, -hw)]
         self._half_widths_list = [float(h) for h in self.half_widths]
         # Plain-float end points for the per-step crossing test.
-        self._line_xy = tuple(float(v) for v in self.line.ravel())
-        self._finish_xy = tuple(float(v) for v in self.finish.ravel())
+        lx = [float(v) for v in self.line.ravel()]
+        fx = [float(v) for v in self.finish.ravel()]
+        self._line_xy = (lx[0], lx[1], lx[2], lx[3])
+        self._finish_xy = (fx[0], fx[1], fx[2], fx[3])
         self.state = RaceState()
         self._s_last: float | None = None
         self._progress_at_crossing = 0.0
@@ -183,14 +185,14 @@ class RaceControl:
             return
         st = self.state
         if st.clock_start is None:
-            u = segment_crossing_xy(p0x, p0y, p1x, p1y, *self._line_xy)
+            u = segment_crossing_xy((p0x, p0y), (p1x, p1y), self._line_xy)
             if u is not None:
                 t_cross = t_prev + u * (t - t_prev)
                 st.clock_start = t_cross
                 st.crossing_times.append(t_cross)
                 self._progress_at_crossing = st.progress_m
             return
-        u = segment_crossing_xy(p0x, p0y, p1x, p1y, *self._finish_xy)
+        u = segment_crossing_xy((p0x, p0y), (p1x, p1y), self._finish_xy)
         if u is None:
             return
         t_cross = t_prev + u * (t - t_prev)
