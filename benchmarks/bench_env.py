@@ -11,11 +11,17 @@ Prints (timing never decides a test):
 3. the autopilot's best lap against the friction-limited lap time along the
    true centreline, on every closed track.
 
-Run: ``.venv/bin/python benchmarks/bench_env.py``.
+The bare physics and the World steps replay the env's actions (the same
+commands, held for the same substeps), so they time the car driving as in
+the env run, not standing still.
+
+Run: ``.venv/bin/python benchmarks/bench_env.py [--sections 1,2,3]
+[--localization fused|raw|truth]``.
 """
 
 from __future__ import annotations
 
+import argparse
 import time
 
 import numpy as np
@@ -26,51 +32,79 @@ from envs.runner import run_scenario
 STEPS = 1500
 
 
-def env_rate(sensors: str) -> tuple[float, float, float]:
+def env_rate(sensors: str, localization: str = "fused") -> tuple[float, float, float]:
     """(env steps/s, fraction of time in physics, fraction in World.step)."""
-    env = ConeTrackEnv(track="autocross", sensors=sensors, terminate_off_track=False)
+    env = ConeTrackEnv(
+        track="autocross", sensors=sensors, localization=localization, terminate_off_track=False
+    )
     env.reset(seed=0)
     rng = np.random.default_rng(0)
+    actions = [rng.uniform(-0.3, 1.0, 2).astype(np.float32) for _ in range(STEPS)]
     t0 = time.perf_counter()
-    for _ in range(STEPS):
-        env.step(rng.uniform(-0.3, 1.0, 2).astype(np.float32))
+    for action in actions:
+        env.step(action)
     total = time.perf_counter() - t0
-    n = STEPS * env.config.substeps
-    # The bare physics of as many steps (car and cones, no sensors, no race
-    # control), then whole World steps (physics, race control, sensors).
+    substeps = env.config.substeps
+    commands = [env.action_to_command(a) for a in actions]
+    # The bare physics of as many steps with the same commands (car and cones,
+    # no sensors, no race control), then whole World steps (physics, race
+    # control, sensors).
     env.reset(seed=0)
     world = env.stack.world
+    vehicle, space, dt = world.vehicle, world.space, world.dt
     t0 = time.perf_counter()
-    for _ in range(n):
-        world.vehicle.pre_step(world.dt)
-        world.space.step(world.dt)
-        world.vehicle.post_step()
+    for steer, accel in commands:
+        vehicle.set_command(steer, accel)
+        for _ in range(substeps):
+            vehicle.pre_step(dt)
+            space.step(dt)
+            vehicle.post_step()
     physics = time.perf_counter() - t0
     env.reset(seed=0)
     world = env.stack.world
     t0 = time.perf_counter()
-    for _ in range(n):
-        world.step()
+    for steer, accel in commands:
+        world.set_command(steer, accel)
+        for _ in range(substeps):
+            world.step()
     world_time = time.perf_counter() - t0
     return STEPS / total, physics / total, world_time / total
 
 
 def main() -> None:
     """Print the figures."""
-    print(f"env steps/s with a random policy, autocross, {STEPS} steps of 4 physics substeps")
-    for sensors in ("ideal", "rtk"):
-        rate, phys, world = env_rate(sensors)
-        print(
-            f"  {sensors:5s} sensors, fused: {rate:7.0f} steps/s; bare physics {100 * phys:4.1f} % "
-            f"of the time (env / physics = {1 / phys:4.1f}x), World.step incl. sensors "
-            f"{100 * world:4.1f} %"
-        )
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sections", default="1,2,3", help="comma-separated: 1, 2, 3")
+    parser.add_argument("--localization", default="fused", choices=("fused", "raw", "truth"))
+    args = parser.parse_args()
+    sections = {s.strip() for s in args.sections.split(",")}
+    if "1" in sections:
+        print(f"env steps/s with a random policy, autocross, {STEPS} steps of 4 physics substeps")
+        for sensors in ("ideal", "rtk"):
+            rate, phys, world = env_rate(sensors, args.localization)
+            print(
+                f"  {sensors:5s} sensors, {args.localization}: {rate:7.0f} steps/s; bare physics "
+                f"{100 * phys:4.1f} % of the time (env / physics = {1 / phys:4.1f}x), "
+                f"World.step incl. sensors {100 * world:4.1f} %"
+            )
+    if "2" in sections:
+        closed_loop()
+    if "3" in sections:
+        lap_ratios()
+
+
+def closed_loop() -> None:
+    """Section 2: the real-time factor of ``conesim run``."""
     print("closed loop (conesim run), autocross, 2 laps, rtk, fused, seed 0:")
     r = run_scenario("autocross", laps=2, seed=0)
     print(
         f"  {r.sim_time_s:.1f} s simulated in {r.wall_time_s:.2f} s wall: "
         f"{r.real_time_factor:.1f}x real time"
     )
+
+
+def lap_ratios() -> None:
+    """Section 3: best lap against the friction-limited lap."""
     print("autopilot best lap against the friction-limited lap (QSS, true centreline):")
     for track in ("trackdrive", "autocross", "skidpad", "acceleration"):
         r = run_scenario(track, laps=2, seed=0)

@@ -131,7 +131,7 @@ class VehicleStack:
         return out
 
     def _broadcast(self) -> None:
-        truth = self.world.state.antenna_pose()
+        truth = self.world.antenna_pose
         sent = self.broadcaster.step(self.world.time, truth)
         if sent is not None:
             self.localization_samples.append(

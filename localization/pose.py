@@ -51,6 +51,9 @@ class Pose2D:
     yaw: float
 
     def __post_init__(self) -> None:
+        # One test on the fast path: poses are built every physics step.
+        if math.isfinite(self.x) and math.isfinite(self.y) and math.isfinite(self.yaw):
+            return
         for name in ("x", "y", "yaw"):
             value = getattr(self, name)
             if not math.isfinite(value):

@@ -138,14 +138,31 @@ def segment_crossing(
     Returns:
         The fraction u in [0, 1] along p0 -> p1 at the crossing, or None.
     """
-    d = p1 - p0
-    e = b - a
-    denom = d[0] * e[1] - d[1] * e[0]
+    return segment_crossing_xy(
+        (float(p0[0]), float(p0[1])),
+        (float(p1[0]), float(p1[1])),
+        (float(a[0]), float(a[1]), float(b[0]), float(b[1])),
+    )
+
+
+def segment_crossing_xy(
+    p0: tuple[float, float], p1: tuple[float, float], line: tuple[float, float, float, float]
+) -> float | None:
+    """:func:`segment_crossing` on plain floats, the line as (ax, ay, bx, by).
+
+    The same operations in the same order (every physics step).
+    """
+    p0x, p0y = p0
+    p1x, p1y = p1
+    ax, ay, bx, by = line
+    dx, dy = p1x - p0x, p1y - p0y
+    ex, ey = bx - ax, by - ay
+    denom = dx * ey - dy * ex
     if denom == 0.0:
         return None
-    w = a - p0
-    u = (w[0] * e[1] - w[1] * e[0]) / denom
-    v = (w[0] * d[1] - w[1] * d[0]) / denom
+    wx, wy = ax - p0x, ay - p0y
+    u = (wx * ey - wy * ex) / denom
+    v = (wx * dy - wy * dx) / denom
     if 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0:
-        return float(u)
+        return u
     return None

@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from localization.pose import Pose2D
-from sim.progress import PolylineProgress, segment_crossing
+from sim.progress import PolylineProgress, segment_crossing, segment_crossing_xy
 
 
 @dataclass(frozen=True)
@@ -130,6 +130,11 @@ class RaceControl:
         hl, hw = 0.5 * car_length, 0.5 * car_width
         self._corners_list = [(hl, hw), (hl, -hw), (-hl, hw), (-hl, -hw)]
         self._half_widths_list = [float(h) for h in self.half_widths]
+        # Plain-float end points for the per-step crossing test.
+        lx = [float(v) for v in self.line.ravel()]
+        fx = [float(v) for v in self.finish.ravel()]
+        self._line_xy = (lx[0], lx[1], lx[2], lx[3])
+        self._finish_xy = (fx[0], fx[1], fx[2], fx[3])
         self.state = RaceState()
         self._s_last: float | None = None
         self._progress_at_crossing = 0.0
@@ -152,7 +157,7 @@ class RaceControl:
 
     def update(self, t_prev: float, t: float, pose_prev: Pose2D, pose: Pose2D) -> None:
         """Account for one physics step from ``pose_prev`` at ``t_prev`` to ``pose`` at ``t``."""
-        proj = self.progress.project(pose.xy)
+        proj = self.progress.project((pose.x, pose.y))
         self._advance_progress(proj.s)
         self._check_crossing(t_prev, t, pose_prev, pose, proj.tangent)
         self._check_off_track(t, pose, proj.lateral, proj.index, proj.tangent)
@@ -175,19 +180,19 @@ class RaceControl:
         pose: Pose2D,
         tangent: tuple[float, float],
     ) -> None:
-        p0, p1 = pose_prev.xy, pose.xy
-        if float(np.dot(p1 - p0, tangent)) <= 0.0:
+        p0x, p0y, p1x, p1y = pose_prev.x, pose_prev.y, pose.x, pose.y
+        if (p1x - p0x) * tangent[0] + (p1y - p0y) * tangent[1] <= 0.0:
             return
         st = self.state
         if st.clock_start is None:
-            u = segment_crossing(p0, p1, self.line[0], self.line[1])
+            u = segment_crossing_xy((p0x, p0y), (p1x, p1y), self._line_xy)
             if u is not None:
                 t_cross = t_prev + u * (t - t_prev)
                 st.clock_start = t_cross
                 st.crossing_times.append(t_cross)
                 self._progress_at_crossing = st.progress_m
             return
-        u = segment_crossing(p0, p1, self.finish[0], self.finish[1])
+        u = segment_crossing_xy((p0x, p0y), (p1x, p1y), self._finish_xy)
         if u is None:
             return
         t_cross = t_prev + u * (t - t_prev)

@@ -114,6 +114,7 @@ class World:
         cfg = self.config
         track = self.track
         self.seed = int(seed)
+        self._dt = cfg.dt
         self.time = 0.0
         self.steps = 0
         self.space = pymunk.Space()
@@ -143,9 +144,9 @@ class World:
             car_width=cfg.vehicle.width,
             rules=cfg.rules,
         )
-        self._state = self.vehicle.state
+        self._set_state(self.vehicle.state)
         self._accel_prev = (0.0, 0.0)  # antenna acceleration of the last step, world [m/s^2]
-        self.race.start(0.0, self._state.pose)
+        self.race.start(0.0, self._pose)
         self.sensors = SensorSuite(cfg.sensor_profile, seed=self.seed, origin=cfg.origin)
         return self.sensors.step(self._truth())
 
@@ -160,6 +161,21 @@ class World:
         return self._state
 
     @property
+    def pose(self) -> Pose2D:
+        """The CG's true pose after the last step (``state.pose``, built once per step)."""
+        return self._pose
+
+    @property
+    def antenna_pose(self) -> Pose2D:
+        """The antenna's true pose after the last step (``state.antenna_pose()``, once per step)."""
+        return self._antenna_pose
+
+    def _set_state(self, state: VehicleState) -> None:
+        self._state = state
+        self._pose = state.pose
+        self._antenna_pose = state.antenna_pose()
+
+    @property
     def race_state(self) -> RaceState:
         """Laps, off-track events, progress, stuck flag."""
         return self.race.state
@@ -170,16 +186,17 @@ class World:
 
     def step(self) -> list[Message]:
         """Advance one physics step; return the measurements delivered now."""
-        dt = self.dt
-        prev = self._state
-        self.vehicle.pre_step(dt)
+        dt = self._dt
+        prev_pose = self._pose
+        vehicle = self.vehicle
+        vehicle.pre_step(dt)
         self.space.step(dt)
-        self.vehicle.post_step()
+        vehicle.post_step()
         self.steps += 1
         t = self.steps * dt  # no accumulated round-off: t is exact in steps
         self.cones.update(t)
-        self._state = self.vehicle.state
-        self.race.update(self.time, t, prev.pose, self._state.pose)
+        self._set_state(vehicle.state)
+        self.race.update(self.time, t, prev_pose, self._pose)
         self.time = t
         if self.cones.version != self._cone_version:
             self.cone_map.update(self.cones.positions)
@@ -222,10 +239,11 @@ class World:
         s = self._state
         rx, ry = s.antenna_x, s.antenna_y
         w, dw = s.yaw_rate, s.yaw_accel
-        yaw_rate = w - dw * self.dt if self.steps else w
+        dt = self._dt
+        yaw_rate = w - dw * dt if self.steps else w
         ax = s.ax - dw * ry - w * w * rx  # this step's, body frame at mid-step
         ay = s.ay + dw * rx - w * w * ry
-        yaw_mid = s.yaw - 0.5 * yaw_rate * self.dt
+        yaw_mid = s.yaw - 0.5 * yaw_rate * dt
         c, sn = math.cos(yaw_mid), math.sin(yaw_mid)
         awx, awy = c * ax - sn * ay, sn * ax + c * ay
         px, py = self._accel_prev
@@ -233,8 +251,8 @@ class World:
         mx, my = 0.5 * (awx + px), 0.5 * (awy + py)
         return TruthSample(
             t=self.time,
-            antenna_pose=s.antenna_pose(),
-            speed=s.vx - w * ry - 0.5 * self.dt * ax,
+            antenna_pose=self._antenna_pose,
+            speed=s.vx - w * ry - 0.5 * dt * ax,
             yaw_rate=yaw_rate,
             accel_x=c * mx + sn * my,
             accel_y=-sn * mx + c * my,

@@ -50,6 +50,11 @@ class Sensor(Protocol):
     def capture(self, truth: TruthSample) -> Message | None: ...
 
 
+def _delivery_order(item: tuple[float, int, Message]) -> tuple[float, int]:
+    """(stamp, sensor order) of a queued delivery."""
+    return item[0], item[1]
+
+
 class SensorSuite:
     """All sensors of one car, with their clocks and delivery queues.
 
@@ -128,11 +133,15 @@ class SensorSuite:
                 if message is not None:
                     queue.append((t + sensor.config.latency, t, message))
         out: list[tuple[float, int, Message]] = []
+        deliver_by = t + TIME_EPS
         for order, queue in enumerate(self._queues):
-            while queue and queue[0][0] <= t + TIME_EPS:
+            while queue and queue[0][0] <= deliver_by:
                 _, stamp, message = queue.popleft()
                 out.append((stamp, order, message))
-        out.sort(key=lambda item: (item[0], item[1]))
+        if not out:
+            return []
+        if len(out) > 1:
+            out.sort(key=_delivery_order)
         return [message for _, _, message in out]
 
     def set_enabled(self, name: str, enabled: bool) -> None:
