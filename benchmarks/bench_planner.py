@@ -7,7 +7,8 @@
    median <= 0.5 ms, p99 <= 2 ms. Each size is warmed up (20 detections)
    before it is timed: the planner's compiled kernels (``planner.kernels``,
    numba) are compiled on their first call, or loaded from numba's cache, and
-   neither belongs in a per-detection latency.
+   neither belongs in a per-detection latency (the autopilot does it when it
+   is built: ``planner.autopilot.warm_up_planner``).
 2. Midline accuracy on each shipped track: the car is put on the global path
    every metre for one lap (exact pose in the frame tree), the cones are seen
    by ``sim.sensors.ConeDetector`` with the ``ideal`` and the default noisy

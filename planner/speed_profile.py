@@ -37,11 +37,25 @@ Vehicle Dynamics", ch. 2): on a step the longitudinal limit is
 starts from (``ellipse_forward_pass``, ``ellipse_backward_pass``). Without it
 the car plans to brake at the full ``a_brake`` while already cornering at
 ``a_lat_max``, more than the tyres give, and slides. These passes are loops
-(the limit depends on the speed): 0.15 ms per 60 waypoints with the jerk
-limit, against 0.05 ms for the closed-form passes.
+(the limit depends on the speed).
 
-Written for speed (per plan, on ~60 waypoints): the step vectors and lengths
-are computed once for the arc length and the curvature.
+Why ``speed_profile`` is compiled: it runs on every plan (twice per detection
+with the global speed plan), and composed from the numpy and Python step
+functions below it took 0.10 ms per 60 waypoints with the default limits
+(0.04 ms without the ellipse and the jerk limit), a fifth of the planning
+step's 0.5 ms budget (issue 5). Compiled (``kernels.profile_limits`` and
+``kernels.profile_passes``) it takes 7.6 us (4.1 us); the same operations in
+the same order, so the same numbers bit for bit, which
+``tests/planner/test_kernels.py`` checks against the step functions composed
+for every switch. The jerk limit's cube root stays ``numpy.cbrt`` between the
+two kernels: on CPUs with AVX-512 numpy takes it from SVML, whose last bit
+differs from libm's (and numba's) in about half the cases. The step
+functions stay as the reference, for the worked-number tests, and for the
+callers that need one step (``global_speed``, the autopilot).
+
+Inputs the step functions reject differ: they raise on an infinite window
+(``int(inf)``) or on a negative square root (a decreasing ``s``), where the
+kernels average over the whole path and give NaN.
 """
 
 from __future__ import annotations
@@ -50,10 +64,12 @@ import math
 
 import numpy as np
 
+from planner import kernels
 from planner.config import SpeedProfileConfig
 from planner.geometry import FloatArray
 
 _DEFAULT_CONFIG = SpeedProfileConfig()  # frozen: built once
+_NO_ARC = np.zeros(0)  # ``profile_limits``' s when it computes the arc length
 
 
 def menger_curvature(points: FloatArray) -> FloatArray:
@@ -196,6 +212,11 @@ def speed_profile(
 ) -> FloatArray:
     """Target speed (n,) [m/s] at each waypoint of an (n, 2) path [m].
 
+    Steps 1-4 above, compiled (``kernels.profile_limits`` and
+    ``kernels.profile_passes``, with ``numpy.cbrt`` between them): the
+    numbers of the step functions of this module composed (see
+    ``tests/planner/test_kernels.py``), bit for bit.
+
     Args:
         points: the waypoints, in driving order.
         config: the limits.
@@ -204,36 +225,36 @@ def speed_profile(
         v_end: with ``horizon_stop``, the speed allowed at the last waypoint
             [m/s] instead of 0 (the global path says what lies beyond it).
     """
-    config = config or _DEFAULT_CONFIG
-    n = len(points)
-    if n == 0:
+    c = config or _DEFAULT_CONFIG
+    pts = np.ascontiguousarray(points, dtype=float)
+    if len(pts) == 0:
         return np.zeros(0)
-    step = points[1:] - points[:-1]
-    step_length = np.hypot(step[:, 0], step[:, 1])
-    if s is None:
-        s = np.zeros(n)
-        np.cumsum(step_length, out=s[1:])  # arc_length(points)
-    kappa = _menger(points, step, step_length)
-    if config.curvature_window > 0.0 and n > 2:
-        kappa = window_mean(kappa, float(s[-1]) / (n - 1), config.curvature_window)
-    v = curvature_limit(kappa, config)
-    jerk = jerk_limit(kappa, float(s[-1]) / (n - 1), config) if n > 2 else None
-    if jerk is not None:
-        v = np.minimum(v, jerk)
-    if v_start is not None:
-        v[0] = min(v[0], max(v_start, 0.0))
-    if config.friction_ellipse:
-        c = config
-        v = ellipse_forward_pass(
-            s, v, kappa, c.a_drive, a_lat_max=c.a_lat_max, a_lat_aero=c.a_lat_aero
-        )
-    else:
-        v = forward_pass(s, v, config.a_drive)
-    if config.horizon_stop:
-        v[-1] = 0.0 if v_end is None else min(v[-1], max(v_end, 0.0))
-    if config.friction_ellipse:
-        c = config
-        return ellipse_backward_pass(
-            s, v, kappa, c.a_brake, a_lat_max=c.a_lat_max, a_lat_aero=c.a_lat_aero
-        )
-    return backward_pass(s, v, config.a_brake)
+    arc, kappa, v, ratio = kernels.profile_limits(
+        pts,
+        _NO_ARC if s is None else np.ascontiguousarray(s, dtype=float),
+        s is not None,
+        float(c.curvature_window),
+        float(c.a_lat_max),
+        float(c.a_lat_aero),
+        c.a_lat_max / c.v_max**2,  # as curvature_limit's floor
+        float(c.v_max),
+        float(c.lateral_jerk_max),
+        float(c.jerk_window),
+    )
+    speeds: FloatArray = kernels.profile_passes(
+        arc,
+        kappa,
+        v,
+        np.cbrt(ratio) if len(ratio) else ratio,  # jerk_limit's cube root, numpy's
+        v_start is not None,
+        0.0 if v_start is None else float(v_start),
+        bool(c.friction_ellipse),
+        float(c.a_drive),
+        float(c.a_brake),
+        float(c.a_lat_max),
+        float(c.a_lat_aero),
+        bool(c.horizon_stop),
+        v_end is not None,
+        0.0 if v_end is None else float(v_end),
+    )
+    return speeds

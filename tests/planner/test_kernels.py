@@ -5,11 +5,14 @@ stood before the kernels), compared exactly on random inputs that include
 ties (points on a grid), zero-length steps and closed (wrapped) station
 axes. The whole planning step was also compared before and after on 718
 recorded scenes (synthetic winding tracks and every shipped track, ideal and
-noisy detectors): identical outputs.
+noisy detectors): identical outputs. The speed profile's reference is
+``speed_profile``'s numpy and Python body as it stood before it was compiled
+(friction-ellipse passes, jerk limit, downforce), compared byte for byte.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -34,10 +37,13 @@ from planner.geometry import PathProjector, StationAxis, arc_length, station_dif
 from planner.midline import boundary_cones, in_view
 from planner.ordering import start_index
 from planner.speed_profile import (
+    _menger,
     backward_pass,
     curvature_limit,
+    ellipse_backward_pass,
+    ellipse_forward_pass,
     forward_pass,
-    menger_curvature,
+    jerk_limit,
     speed_profile,
     window_mean,
 )
@@ -50,22 +56,42 @@ def ref_speed_profile(
     points: np.ndarray,
     config: SpeedProfileConfig,
     v_start: float | None = None,
+    *,
+    s: np.ndarray | None = None,
     v_end: float | None = None,
 ) -> np.ndarray:
-    """``speed_profile`` as numpy steps (its own step functions)."""
+    """``speed_profile`` as numpy and Python steps: its body before it was compiled."""
     n = len(points)
     if n == 0:
         return np.zeros(0)
-    s = arc_length(points)
-    kappa = menger_curvature(points)
+    step = points[1:] - points[:-1]
+    step_length = np.hypot(step[:, 0], step[:, 1])
+    if s is None:
+        s = np.zeros(n)
+        np.cumsum(step_length, out=s[1:])  # arc_length(points)
+    kappa = _menger(points, step, step_length)
     if config.curvature_window > 0.0 and n > 2:
         kappa = window_mean(kappa, float(s[-1]) / (n - 1), config.curvature_window)
     v = curvature_limit(kappa, config)
+    jerk = jerk_limit(kappa, float(s[-1]) / (n - 1), config) if n > 2 else None
+    if jerk is not None:
+        v = np.minimum(v, jerk)
     if v_start is not None:
         v[0] = min(v[0], max(v_start, 0.0))
-    v = forward_pass(s, v, config.a_drive)
+    if config.friction_ellipse:
+        c = config
+        v = ellipse_forward_pass(
+            s, v, kappa, c.a_drive, a_lat_max=c.a_lat_max, a_lat_aero=c.a_lat_aero
+        )
+    else:
+        v = forward_pass(s, v, config.a_drive)
     if config.horizon_stop:
         v[-1] = 0.0 if v_end is None else min(v[-1], max(v_end, 0.0))
+    if config.friction_ellipse:
+        c = config
+        return ellipse_backward_pass(
+            s, v, kappa, c.a_brake, a_lat_max=c.a_lat_max, a_lat_aero=c.a_lat_aero
+        )
     return backward_pass(s, v, config.a_brake)
 
 
@@ -380,28 +406,135 @@ def test_start_index_is_the_masked_argmin() -> None:
         assert start_index(mid, station, sensor, axis, config) == expected
 
 
+def assert_bits_equal(got: np.ndarray, expected: np.ndarray) -> None:
+    """The same dtype, shape and bytes (so -0.0 is not 0.0, and NaN is NaN)."""
+    assert got.dtype == expected.dtype and got.shape == expected.shape
+    if got.tobytes() != expected.tobytes():
+        assert_array_equal(got, expected)  # shows where
+        raise AssertionError(f"bits differ: {got!r} != {expected!r}")
+
+
+# Every combination of the profile's switches: friction ellipse, jerk limit
+# (off, default, tight; a jerk window of 1.25 m on 0.25 m steps rounds a tie,
+# 2.5 -> 2, 0.25 m gives no window), downforce (none, default, more than
+# some paths' curvature), curvature window (off, default, 1.0 m = 4 steps of
+# 0.25 m exactly: int() of an integer), horizon stop.
+PROFILE_CONFIGS = [
+    SpeedProfileConfig(
+        friction_ellipse=ellipse,
+        lateral_jerk_max=jerk,
+        jerk_window=jerk_window,
+        a_lat_aero=aero,
+        curvature_window=window,
+        horizon_stop=stop,
+    )
+    for ellipse in (True, False)
+    for jerk, jerk_window in ((math.inf, 4.0), (60.0, 4.0), (5.0, 1.25), (60.0, 0.25))
+    for aero in (0.0, 0.0143, 0.5)
+    for window in (0.0, 2.0, 1.0)
+    for stop in (True, False)
+]
+
+
+def profile_cases(rng: np.random.Generator, trials: int) -> list[np.ndarray]:
+    """Paths: random walks of several step sizes, smooth curves, walks on a
+    0.25 m grid (exact arc lengths and spacings, collinear steps, reversals),
+    repeated points, NaN points, and every length from 0 to 5."""
+    cases = [np.zeros((n, 2)) for n in range(3)]
+    cases += [np.cumsum(rng.normal(0.0, 1.0, (n, 2)), axis=0) for n in range(1, 6)]
+    cases.append(np.repeat(rng.normal(0.0, 1.0, (1, 2)), 7, axis=0))  # one point, 7 times
+    moves = np.array([[0.25, 0.0], [0.0, 0.25], [0.0, -0.25], [-0.25, 0.0]])
+    for trial in range(trials):
+        n = int(rng.integers(0, 90))
+        kind = trial % 4
+        if kind == 0:
+            points = np.cumsum(rng.normal(0.0, rng.choice([0.05, 0.5, 3.0]), (n, 2)), axis=0)
+        elif kind == 1:
+            t = np.cumsum(rng.uniform(0.3, 0.6, n))
+            points = np.column_stack([t, rng.uniform(1.0, 8.0) * np.sin(t / rng.uniform(3, 20))])
+        elif kind == 2:
+            points = np.cumsum(moves[rng.choice(4, n, p=[0.6, 0.15, 0.15, 0.1])], axis=0)
+        else:
+            points = np.cumsum(rng.normal(0.0, 0.5, (n, 2)), axis=0)
+            if n > 6:
+                points[5] = points[4]
+                points[n - 1] = points[n - 2]
+        if n > 8 and trial % 97 == 0:
+            points[int(rng.integers(0, n)), int(rng.integers(0, 2))] = math.nan
+        cases.append(points)
+    return cases
+
+
 def test_speed_profile_is_the_numpy_steps() -> None:
-    """Curvature, window mean, limits, both passes; start and end speeds; repeated points."""
+    """The compiled profile is the numpy steps, bit for bit, for every switch.
+
+    Each case goes through a config of ``PROFILE_CONFIGS`` in turn (about 6
+    cases per config), with the start and end speeds free, negative, -0.0,
+    NaN, inf and ordinary, and with the arc length given (as computed, and
+    scaled, which the profile takes as it comes) or not.
+    """
     rng = np.random.default_rng(25)
-    plain = {"friction_ellipse": False, "lateral_jerk_max": math.inf, "a_lat_aero": 0.0}
-    configs = [
-        SpeedProfileConfig(**plain),
-        SpeedProfileConfig(curvature_window=0.0, **plain),
-        SpeedProfileConfig(horizon_stop=False, **plain),
+    starts = [None, 0.0, -0.0, -1.0, 3.7, 100.0, math.nan, math.inf]
+    ends = [None, 2.5, -0.5, -0.0, math.inf]
+    cases = profile_cases(rng, 2000)
+    for i, points in enumerate(cases):
+        config = PROFILE_CONFIGS[i % len(PROFILE_CONFIGS)]
+        v_start = starts[i % len(starts)]
+        v_end = ends[i % len(ends)]
+        with np.errstate(invalid="ignore"):  # the NaN cases
+            expected = ref_speed_profile(points, config, v_start, v_end=v_end)
+        assert_bits_equal(speed_profile(points, config, v_start, v_end=v_end), expected)
+        if len(points):
+            # as computed; scaled; evenly spaced (finite also where a point is NaN)
+            s = [arc_length(points), 1.1 * arc_length(points), 0.4 * np.arange(len(points))][i % 3]
+            with np.errstate(invalid="ignore", over="ignore"):
+                expected = ref_speed_profile(points, config, v_start, s=s, v_end=v_end)
+            assert_bits_equal(speed_profile(points, config, v_start, s=s, v_end=v_end), expected)
+
+
+def test_speed_profile_edge_cases_for_every_switch() -> None:
+    """Every config, start and end speed on paths of 1 to 3 points, and on
+    paths with NaN: a NaN point (curvature 0 around it; its arc length NaN
+    from there, or an even finite one), a NaN arc length in the middle (NaN
+    steps in the passes), coordinates of 1e155 m whose curvature overflows
+    to inf / inf = NaN (NaN curvature, window means and jerk limits)."""
+    rng = np.random.default_rng(27)
+    starts = [None, 0.0, -0.0, -1.0, 3.7, math.nan, math.inf]
+    ends = [None, 0.0, -0.0, 2.5, -0.5, math.nan, math.inf]
+    nan_path = np.cumsum(rng.normal(0.0, 0.5, (14, 2)), axis=0)
+    nan_path[6, 1] = math.nan
+    paths = [
+        (np.zeros((1, 2)), None),
+        (rng.normal(0.0, 1.0, (2, 2)), None),
+        (rng.normal(0.0, 1.0, (3, 2)), None),
+        (nan_path, None),
+        (nan_path, 0.4 * np.arange(14)),
+        (nan_path, np.where(np.arange(14) == 9, math.nan, 0.4 * np.arange(14))),
+        (np.cumsum(rng.normal(0.0, 1e155, (14, 2)), axis=0), 0.4 * np.arange(14)),
     ]
-    for trial in range(300):
-        n = int(rng.integers(0, 80))
-        points = np.cumsum(rng.normal(0.0, 0.5, (n, 2)), axis=0)
-        if n > 5 and trial % 5 == 0:
-            points[4] = points[3]
-        config = configs[trial % len(configs)]
-        v_start = [None, 0.0, -1.0, 3.7, 100.0][trial % 5]
-        v_end = [None, 2.5, -0.5][trial % 3]
-        expected = ref_speed_profile(points, config, v_start, v_end)
-        got = speed_profile(points, config, v_start, v_end=v_end)
-        assert_array_equal(got, expected)
-        assert_array_equal(speed_profile(points, config, v_start, s=arc_length(points),
-                                         v_end=v_end), expected)  # fmt: skip
+    for (points, s), config in itertools.product(paths, PROFILE_CONFIGS):
+        speeds = list(itertools.product(starts, ends))
+        if len(points) > 3:  # the NaN paths: each start and each end once
+            speeds = list(zip(starts, ends, strict=True))
+        for v_start, v_end in speeds:
+            with np.errstate(invalid="ignore", over="ignore"):
+                expected = ref_speed_profile(points, config, v_start, s=s, v_end=v_end)
+            got = speed_profile(points, config, v_start, s=s, v_end=v_end)
+            assert_bits_equal(got, expected)
+
+
+def test_speed_profile_is_the_numpy_steps_on_the_global_paths() -> None:
+    """Along each shipped track's global path, open and (closed) over three laps,
+    as ``GlobalSpeedPlan`` profiles it, with the default limits."""
+    from localization.global_path import global_path_for_track
+    from tracks import load_track, shipped_tracks
+
+    for name in shipped_tracks():
+        path = global_path_for_track(load_track(name))
+        pts = np.asarray(path.xy, dtype=float)
+        laps = np.vstack([pts, pts, pts, pts[:1]]) if path.closed else pts
+        for config in PROFILE_CONFIGS[::7]:
+            assert_bits_equal(speed_profile(laps, config), ref_speed_profile(laps, config))
 
 
 def test_spline_path_is_bspline_and_interp() -> None:
@@ -481,6 +614,66 @@ print("ok")
 """
     done = subprocess.run(
         [sys.executable, "-c", script], capture_output=True, text=True, check=False, timeout=300
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert done.stdout.strip() == "ok"
+
+
+def test_building_an_autopilot_loads_every_kernel_the_planning_step_calls() -> None:
+    """After ``warm_up_planner`` (in ``Autopilot()``), planning along a winding
+    track with the local and the global speed source calls no kernel, and no
+    argument types, that the warm-up did not already load (a fresh process)."""
+    import subprocess
+    import sys
+
+    script = """
+import dataclasses, math
+import numpy as np
+from numba.core.registry import CPUDispatcher
+from localization.frames import Buffer, TransformStamped
+from localization.global_path import global_path_from_centreline
+from localization.messages import ConeDetections, Header
+from localization.pose import Pose2D
+from planner import AutopilotConfig, kernels
+from planner.autopilot import Autopilot
+from planner.midline import PlanStatus
+
+def loaded():
+    return {k: len(v.signatures) for k, v in vars(kernels).items()
+            if isinstance(v, CPUDispatcher) and v.signatures}
+
+x = np.arange(0.0, 200.0, 0.5)
+centre = np.column_stack([x, 4.0 * np.sin(x / 8.0)])
+t = np.gradient(centre, axis=0)
+t /= np.hypot(t[:, 0], t[:, 1])[:, None]
+normal = np.column_stack([-t[:, 1], t[:, 0]])
+cones = np.vstack([centre + 1.75 * normal, centre - 1.75 * normal])[::5]
+path = global_path_from_centreline(centre, closed=False)
+assert not loaded()
+pilots = [Autopilot(Buffer(), path)]
+after_warm_up = loaded()
+pilots.append(Autopilot(Buffer(), path, dataclasses.replace(
+    AutopilotConfig(), speed_source="global")))
+ok = 0
+for pilot in pilots:
+    for k, i in enumerate(range(10, 300, 15)):
+        d = centre[i + 1] - centre[i]
+        pose = Pose2D(float(centre[i, 0]), float(centre[i, 1]), math.atan2(d[1], d[0]))
+        pilot.buffer.set_transform(
+            TransformStamped.from_pose2d("reference", "os_sensor", float(k), pose))
+        local = pose.inverse_transform_points(cones)
+        local = local[(local[:, 0] > -2.0) & (local[:, 0] < 30.0)]
+        local = local[np.argsort(np.hypot(local[:, 0], local[:, 1]))]
+        plan = pilot.on_detections(ConeDetections(
+            Header(float(k), "os_sensor"), np.column_stack([local, np.zeros(len(local))])))
+        ok += plan is not None and plan.status is PlanStatus.OK
+assert ok > 30, ok
+assert loaded() == after_warm_up, (after_warm_up, loaded())
+assert {"profile_limits", "profile_passes", "spline_path", "nearest_segments"} <= set(loaded())
+print("ok")
+"""
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=False, timeout=600
     )
     assert done.returncode == 0, done.stdout + done.stderr
     assert done.stdout.strip() == "ok"
