@@ -5,7 +5,13 @@ truth. For each sensor, in the fixed order ``SENSOR_ORDER``, it asks the
 sensor's ``CaptureClock`` whether a capture is due (quantisation: see
 ``timing.py``), captures, and queues the message for delivery at
 stamp + latency. It returns every queued message whose delivery time has come
-(t >= stamp + latency, within ``TIME_EPS``), sorted by (stamp, sensor order).
+(t >= stamp + latency, within ``TIME_EPS``), sorted by stamp and, at equal
+stamps, by ``DELIVERY_RANK``: the IMU and wheel speed (the motion up to the
+stamp) before the heading, the fix and the cones, the order in which an
+estimator applies them. Delivered the other way round, a zero-latency heading
+reaches the filter before the IMU sample that ends at its stamp, is gated
+against a prediction with the previous sample's rate, and is replayed when the
+sample comes.
 
 A disabled sensor captures nothing, but its clock keeps running so that it
 resumes on its grid, and messages already in flight are still delivered.
@@ -35,6 +41,7 @@ from sim.sensors.validation import check_non_negative, check_positive, check_pro
 from sim.sensors.wheel_speed import WheelSpeedSensor
 
 SENSOR_ORDER = SECTIONS  # ("gps", "heading", "imu", "wheel_speed", "cones")
+DELIVERY_RANK = {"imu": 0, "wheel_speed": 1, "heading": 2, "gps": 3, "cones": 4}
 
 
 class Sensor(Protocol):
@@ -51,7 +58,7 @@ class Sensor(Protocol):
 
 
 def _delivery_order(item: tuple[float, int, Message]) -> tuple[float, int]:
-    """(stamp, sensor order) of a queued delivery."""
+    """(stamp, delivery rank) of a queued delivery."""
     return item[0], item[1]
 
 
@@ -89,6 +96,7 @@ class SensorSuite:
         )
         self._clocks = [CaptureClock(s.config.rate, s.config.phase) for s in self._sensors]
         self._queues: list[deque[tuple[float, float, Message]]] = [deque() for _ in self._sensors]
+        self._ranks = [DELIVERY_RANK[s.name] for s in self._sensors]
         self._last_t: float | None = None
         self.seed = seed
 
@@ -120,7 +128,7 @@ class SensorSuite:
             truth: the state at this physics step; ``truth.t`` must increase.
 
         Returns:
-            Messages with stamp + latency <= truth.t, sorted by (stamp, sensor order).
+            Messages with stamp + latency <= truth.t, sorted by (stamp, delivery rank).
         """
         t = truth.t
         if self._last_t is not None and not t > self._last_t:
@@ -134,10 +142,10 @@ class SensorSuite:
                     queue.append((t + sensor.config.latency, t, message))
         out: list[tuple[float, int, Message]] = []
         deliver_by = t + TIME_EPS
-        for order, queue in enumerate(self._queues):
+        for rank, queue in zip(self._ranks, self._queues, strict=True):
             while queue and queue[0][0] <= deliver_by:
                 _, stamp, message = queue.popleft()
-                out.append((stamp, order, message))
+                out.append((stamp, rank, message))
         if not out:
             return []
         if len(out) > 1:

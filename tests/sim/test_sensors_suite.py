@@ -84,20 +84,32 @@ def test_rates_and_latencies_are_exact_at_200_hz(
         assert_allclose(delivered - stamps, latency, atol=1e-9)
 
 
-def test_messages_are_sorted_by_stamp_then_sensor_order() -> None:
-    """Within one step's output: (stamp, gps < heading < imu < wheel_speed < cones)."""
-    suite = SensorSuite("rtk", seed=0)
+DELIVERY = {"Imu": 0, "WheelSpeed": 1, "HeadingStamped": 2, "NavSatFix": 3, "ConeDetections": 4}
+
+
+@pytest.mark.parametrize("profile", ["rtk", "ideal"])
+def test_messages_are_sorted_by_stamp_then_delivery_rank(profile: str) -> None:
+    """Within one step's output: (stamp, imu < wheel_speed < heading < gps < cones). With
+    the ideal profile's zero latencies the heading and the fix share stamps with
+    the IMU: they come after it."""
+    suite = SensorSuite(profile, seed=0)
     for k in range(400):
         out = suite.step(circle_truth(k / 200))
-        keys = [(m.header.stamp, TYPES[type(m).__name__]) for m in out]
+        keys = [(m.header.stamp, DELIVERY[type(m).__name__]) for m in out]
         assert keys == sorted(keys)
-    # t = 0.15: gps and heading of 0.1 (latency 0.05), then imu of 0.15;
+    ideal = SensorSuite("ideal", seed=0)
+    for k in range(21):
+        out = ideal.step(circle_truth(k / 200))
+    assert [type(m).__name__ for m in out] == [  # t = 0.1: every sensor captures
+        "Imu", "WheelSpeed", "HeadingStamped", "NavSatFix", "ConeDetections",
+    ]  # fmt: skip
+    # t = 0.15: heading and gps of 0.1 (latency 0.05), then imu of 0.15;
     # t = 0.2: cones of 0.0 (latency 0.2) come first
     fresh = SensorSuite("rtk", seed=0)
     seen: dict[int, list[tuple[str, float]]] = {}
     for k in range(41):
         seen[k] = [(type(m).__name__, m.header.stamp) for m in fresh.step(circle_truth(k / 200))]
-    assert seen[30] == [("NavSatFix", 0.1), ("HeadingStamped", 0.1), ("Imu", 0.15)]
+    assert seen[30] == [("HeadingStamped", 0.1), ("NavSatFix", 0.1), ("Imu", 0.15)]
     assert seen[40] == [
         ("ConeDetections", 0.0),
         ("HeadingStamped", 0.15),
