@@ -26,7 +26,9 @@ class AutopilotPolicy:
 
     Args:
         env: the env (a wrapped env is unwrapped).
-        config: the autopilot's settings.
+        config: the autopilot's settings; by default ``AutopilotConfig()``,
+            or ``AutopilotConfig.cautious()`` in an episode whose localization
+            is ``raw`` (the seed's broadcaster: a pose up to 150 ms old).
     """
 
     def __init__(self, env: Any, config: AutopilotConfig | None = None) -> None:
@@ -35,16 +37,22 @@ class AutopilotPolicy:
             raise TypeError(f"AutopilotPolicy drives a ConeTrackEnv, got {type(base).__name__}")
         self.env = base
         self.config = config
-        self.autopilot = Autopilot(base.stack.buffer, base.stack.global_path, config)
+        self.autopilot = Autopilot(base.stack.buffer, base.stack.global_path, self._settings())
         self._action = np.zeros(2, dtype=np.float32)
 
     def reset(self, info: dict[str, Any] | None = None) -> NDArray[np.float32]:
         """A fresh autopilot on the env's new frame tree; the first action."""
         stack = self.env.stack
-        self.autopilot = Autopilot(stack.buffer, stack.global_path, self.config)
+        self.autopilot = Autopilot(stack.buffer, stack.global_path, self._settings())
         self.env.overlay = self.autopilot
         self._action = np.zeros(2, dtype=np.float32)
         return self(info or {"messages": stack.initial_messages})
+
+    def _settings(self) -> AutopilotConfig | None:
+        """The given settings, or the defaults for this episode's localization."""
+        if self.config is None and self.env.stack.localization == "raw":
+            return AutopilotConfig.cautious()
+        return self.config
 
     def __call__(self, info: dict[str, Any]) -> NDArray[np.float32]:
         """The action for the next control period."""

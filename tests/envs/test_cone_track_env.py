@@ -11,8 +11,10 @@ from gymnasium.utils.env_checker import check_env
 from numpy.testing import assert_allclose
 
 import envs
+from envs.autopilot_policy import AutopilotPolicy
 from envs.cone_track_env import ConeTrackEnv
 from envs.config import EnvConfig
+from planner import AutopilotConfig
 
 
 def test_registered_and_made_with_one_import() -> None:
@@ -199,3 +201,21 @@ def test_localization_error_in_every_mode() -> None:
         err = info["localization_error"]
         assert err is not None
         assert err["position_m"] < (1e-9 if mode == "truth" else 0.2)
+
+
+def test_autopilot_policy_drives_raw_localization_cautiously() -> None:
+    """Default settings with fused localization; the cautious preset (6 m/s^2
+    lateral, 15 m/s) in an episode with raw localization, also when a reset
+    option picks it; settings given to the policy are kept."""
+    env = ConeTrackEnv(track="autocross")
+    env.reset(seed=0)
+    policy = AutopilotPolicy(env)
+    assert policy.autopilot.config == AutopilotConfig()
+    env.reset(seed=0, options={"localization": "raw"})
+    policy.reset()
+    assert policy.autopilot.config == AutopilotConfig.cautious()
+    assert policy.autopilot.config.speed_profile.a_lat_max == 6.0
+    assert policy.autopilot.config.speed_profile.v_max == 15.0
+    given = AutopilotConfig.from_dict({"control_rate": 40.0})
+    kept = AutopilotPolicy(env, given)
+    assert kept.autopilot.config == given

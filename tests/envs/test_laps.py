@@ -32,3 +32,15 @@ def test_autopilot_completes_laps_cleanly(track: str, seed: int) -> None:
     # No lap beats the friction limit (the QSS is exact to 1e-4; a car at
     # full throttle on the acceleration lane ties it).
     assert all(lap >= result.limit_lap_time_s * (1 - 1e-4) for lap in result.lap_times_s)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("track", ["trackdrive", "autocross", "skidpad"])
+def test_raw_localization_laps_at_the_cautious_limits(track: str) -> None:
+    """The seed's raw broadcaster (last fix, last heading: a pose up to 150 ms
+    old) drives at ``AutopilotConfig.cautious()``: two clean laps. At the
+    default limits the car left trackdrive and autocross with it."""
+    result = run_scenario(track, laps=2, seed=0, sensors="rtk", localization="raw")
+    assert result.finished, result.end_reason
+    assert result.laps_completed == 2
+    assert result.cones_down_or_out == 0 and result.off_track_events == 0
