@@ -83,6 +83,11 @@ class CaptureClock:
         self._threshold = self.phase + value / self.rate - TIME_EPS
 
     @property
+    def threshold(self) -> float:
+        """The earliest step time that captures: ``next_nominal - TIME_EPS`` [s]."""
+        return self._threshold
+
+    @property
     def next_nominal(self) -> float:
         """Nominal time of the next capture, phase + k / rate [s]."""
         return self.phase + self.k / self.rate
