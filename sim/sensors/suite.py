@@ -152,17 +152,23 @@ class SensorSuite:
         deliver_by = t + TIME_EPS
         if t < self._next_capture and self._next_delivery > deliver_by:
             return []  # no clock is due and no queued message is
+        next_capture = math.inf
         for sensor, clock, queue in zip(self._sensors, self._clocks, self._queues, strict=True):
-            if clock.due(t) and sensor.config.enabled:
+            # ``due`` is False, with no side effect, below the threshold.
+            if t >= clock.threshold and clock.due(t) and sensor.config.enabled:
                 message = sensor.capture(truth)
                 if message is not None:
                     queue.append((t + sensor.config.latency, t, message))
+            next_capture = min(next_capture, clock.threshold)
         out: list[tuple[float, int, Message]] = []
+        next_delivery = math.inf
         for rank, queue in zip(self._ranks, self._queues, strict=True):
             while queue and queue[0][0] <= deliver_by:
                 _, stamp, message = queue.popleft()
                 out.append((stamp, rank, message))
-        self._plan()
+            if queue:
+                next_delivery = min(next_delivery, queue[0][0])
+        self._next_capture, self._next_delivery = next_capture, next_delivery
         if not out:
             return []
         if len(out) > 1:
