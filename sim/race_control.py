@@ -157,18 +157,27 @@ class RaceControl:
 
     def update(self, t_prev: float, t: float, pose_prev: Pose2D, pose: Pose2D) -> None:
         """Account for one physics step from ``pose_prev`` at ``t_prev`` to ``pose`` at ``t``."""
+        self.update_xy(t_prev, t, (pose_prev.x, pose_prev.y), (pose.x, pose.y, pose.yaw))
+
+    def update_xy(
+        self,
+        t_prev: float,
+        t: float,
+        xy_prev: tuple[float, float],
+        pose: tuple[float, float, float],
+    ) -> None:
+        """:meth:`update` with the CG's previous (x, y) and its (x, y, yaw) now, plain floats."""
         # Runs every physics step: plain-float maths, the checks written out
         # here (the helpers below do the same operations, for other callers).
-        p1x, p1y = pose.x, pose.y
+        p1x, p1y, yaw = pose
         s, lateral, index, tx, ty = self.progress.project_xy(p1x, p1y)
         self._advance_progress(s)
-        p0x, p0y = pose_prev.x, pose_prev.y
+        p0x, p0y = xy_prev
         if (p1x - p0x) * tx + (p1y - p0y) * ty > 0.0:
             self._crossed(t_prev, t, (p0x, p0y), (p1x, p1y))
         # Off track: the lateral offset of each footprint corner is the car's
         # own plus the corner's offset (rotated into the world) on the
         # track's left normal (-ty, tx).
-        yaw = pose.yaw
         c, sn = math.cos(yaw), math.sin(yaw)
         nx, ny = -ty, tx
         halves = self._half_widths_list

@@ -156,10 +156,11 @@ class World:
             rules=cfg.rules,
         )
         self._state: VehicleState | None = None  # built when asked for
+        self._pose: Pose2D | None = None  # likewise
         self._lever = (cfg.vehicle.antenna_x, cfg.vehicle.antenna_y)
         self._refresh()
         self._accel_prev = (0.0, 0.0)  # antenna acceleration of the last step, world [m/s^2]
-        self.race.start(0.0, self._pose)
+        self.race.start(0.0, self.pose)
         self.sensors = SensorSuite(cfg.sensor_profile, seed=self.seed, origin=cfg.origin)
         return self.sensors.step(self._truth())
 
@@ -182,8 +183,12 @@ class World:
 
     @property
     def pose(self) -> Pose2D:
-        """The CG's true pose after the last step (``state.pose``, built once per step)."""
-        return self._pose
+        """The CG's true pose after the last step (``state.pose``, built when asked for)."""
+        pose = self._pose
+        if pose is None:
+            x, y, yaw = self._kin[0], self._kin[1], self._kin[2]
+            pose = self._pose = Pose2D(x, y, yaw)
+        return pose
 
     @property
     def antenna_pose(self) -> Pose2D:
@@ -202,7 +207,7 @@ class World:
         self._steer = vehicle.steer
         self._state = None
         x, y, yaw = kin[0], kin[1], kin[2]
-        self._pose = Pose2D(x, y, yaw)
+        self._pose = None
         dx, dy = self._lever
         c, s = math.cos(yaw), math.sin(yaw)
         self._antenna_pose = Pose2D(x + c * dx - s * dy, y + s * dx + c * dy, yaw)
@@ -219,7 +224,8 @@ class World:
     def step(self) -> list[Message]:
         """Advance one physics step; return the measurements delivered now."""
         dt = self._dt
-        prev_pose = self._pose
+        kin = self._kin
+        prev_xy = (kin[0], kin[1])
         vehicle = self.vehicle
         vehicle.pre_step(dt)
         self.space.step(dt)
@@ -228,7 +234,8 @@ class World:
         t = self.steps * dt  # no accumulated round-off: t is exact in steps
         self.cones.update(t)
         self._refresh()
-        self.race.update(self.time, t, prev_pose, self._pose)
+        kin = self._kin
+        self.race.update_xy(self.time, t, prev_xy, (kin[0], kin[1], kin[2]))
         self.time = t
         if self.cones.version != self._cone_version:
             self.cone_map.update(self.cones.positions)

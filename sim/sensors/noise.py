@@ -73,7 +73,8 @@ class GaussMarkov:
 
     def step(self, dt: float) -> NDArray[np.float64]:
         """Advance by ``dt`` [s] (>= 0) and return the new value, shape (dim,)."""
-        check_non_negative("GaussMarkov.step", "dt", dt, "[s]")
+        if not (dt >= 0.0 and math.isfinite(dt)):
+            check_non_negative("GaussMarkov.step", "dt", dt, "[s]")
         phi = math.exp(-dt / self.tau)
         w = self._rng.standard_normal(self.value.shape)
         self.value = phi * self.value + self.sigma * math.sqrt(1.0 - phi * phi) * w

@@ -6,6 +6,7 @@ import math
 from dataclasses import astuple, fields
 
 import numpy as np
+import pytest
 
 from envs.observation import SensorMemory, build_observation
 from localization.messages import ConeDetections, Header
@@ -109,3 +110,17 @@ def test_observation_cone_block_follows_the_detection() -> None:
     assert vec[6:12].tolist() == [1.0, 2.0, 1.0, 3.0, -1.0, 1.0]
     memory.update([ConeDetections(Header(0.2, "os_sensor"), np.zeros((0, 3)), ())])
     assert build_observation(memory, None, action, 4, "vector").tolist() == empty.tolist()
+
+
+def test_gps_scalar_conversion_is_the_library_one() -> None:
+    from localization.geodesy import GeodesyError, local_cartesian_to_gps
+    from sim.sensors.gps import GpsReceiver
+
+    gps = GpsReceiver(get_profile("rtk").gps, 0)
+    rng = np.random.default_rng(7)
+    for x, y in rng.uniform(-5e4, 5e4, (2000, 2)).tolist():
+        lat, lon = local_cartesian_to_gps(x, y, gps.origin)
+        assert gps._to_gps(x, y) == (float(lat), float(lon))
+    for bad in (math.nan, math.inf, 1e9):
+        with pytest.raises(GeodesyError):
+            gps._to_gps(0.0, bad)
