@@ -54,6 +54,7 @@ that episode only.
 from __future__ import annotations
 
 import contextlib
+import math
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
@@ -144,9 +145,10 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         """Apply an action for one control period (``physics_rate / control_rate`` steps)."""
         # 1. act
         act = np.asarray(action, dtype=np.float32).reshape(2)
-        if not np.all(np.isfinite(act)):
+        a0, a1 = act.tolist()
+        if not (math.isfinite(a0) and math.isfinite(a1)):
             raise ValueError(f"action must be finite, got {action!r}")
-        self._action = np.clip(act, -1.0, 1.0)
+        self._action = np.minimum(np.maximum(act, -1.0), 1.0)  # np.clip without its wrapper
         steer, accel = self.action_to_command(self._action)
         self.stack.world.set_command(steer, accel)
         # 2. simulate

@@ -147,6 +147,11 @@ class ConeField:
         self.doo_events: list[tuple[float, int]] = []
         self._watch: set[int] = set()
         self._positions = self.initial_positions.copy()
+        # Plain-float copies for the per-step bookkeeping (the array is the
+        # public view; both always hold the same values).
+        self._positions_list = [(float(x), float(y)) for x, y in self._positions]
+        self._initial_list = list(self._positions_list)
+        self._base_widths_list = [float(w) for w in self.base_widths]
         self.version = 0  # bumped whenever a cone's position changes
         self.time = 0.0
         space.on_collision(COLLISION_CAR, COLLISION_CONE, begin=self._on_car_contact)
@@ -187,19 +192,26 @@ class ConeField:
             Ids of cones that became down-or-out at this step.
         """
         self.time = t
+        if not self._watch:
+            return []
         new_doo: list[int] = []
         settled: list[int] = []
+        positions = self._positions_list
         for i in sorted(self._watch):
             body = self.bodies[i]
-            pos = body.position
-            if pos.x != self._positions[i, 0] or pos.y != self._positions[i, 1]:
-                self._positions[i] = (pos.x, pos.y)
+            x, y = body.position
+            px, py = positions[i]
+            if x != px or y != py:
+                positions[i] = (x, y)
+                self._positions[i] = (x, y)
                 self.version += 1
+                px, py = x, y
             if i not in self.doo_ids:
                 # Out: the whole base has left its marked square (axis-aligned
                 # at the cone's start), i.e. moved a full base width along x or y.
-                dx, dy = self._positions[i] - self.initial_positions[i]
-                out = max(abs(dx), abs(dy)) > self.base_widths[i]
+                x0, y0 = self._initial_list[i]
+                dx, dy = px - x0, py - y0
+                out = max(abs(dx), abs(dy)) > self._base_widths_list[i]
                 if out or body.velocity.length > self.params.tip_speed:
                     self.doo_ids.add(i)
                     self.doo_events.append((t, i))

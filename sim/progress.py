@@ -66,6 +66,12 @@ class PolylineProgress:
         self._tangents_list = [(float(a), float(b)) for a, b in self._tangents]
         self._lengths_list = [float(v) for v in self._lengths]
         self._s0_list = [float(v) for v in self._s0]
+        self._segments = [
+            (sx, sy, tx, ty, length)
+            for (sx, sy), (tx, ty), length in zip(
+                self._starts_list, self._tangents_list, self._lengths_list, strict=True
+            )
+        ]
         self._last: int | None = None
 
     def reset(self) -> None:
@@ -96,6 +102,44 @@ class PolylineProgress:
         r = p - foot[k]
         lateral = float(t[0] * r[1] - t[1] * r[0])
         return Projection(float(self._s0[seg] + u[k]), lateral, seg, (float(t[0]), float(t[1])))
+
+    def project_xy(self, px: float, py: float) -> tuple[float, float, int, float, float]:
+        """:meth:`project` of one point on plain floats: (s, lateral, index, tx, ty).
+
+        The same answer bit for bit, without building a ``Projection`` (the
+        race control's per-step path).
+        """
+        i = self._last
+        if i is None:
+            proj = self.project((px, py))
+            return proj.s, proj.lateral, proj.index, proj.tangent[0], proj.tangent[1]
+        # The walk of ``_walk`` with ``_foot`` and ``_step`` inlined.
+        segments = self._segments
+        n = len(segments)
+        closed = self.closed
+        sx, sy, tx, ty, length = segments[i]
+        rx, ry = px - sx, py - sy
+        u = min(max(rx * tx + ry * ty, 0.0), length)
+        fx, fy = rx - tx * u, ry - ty * u
+        best_d2, best_u, best_lat = fx * fx + fy * fy, u, tx * fy - ty * fx
+        for di in (1, -1):
+            while True:
+                j = i + di
+                if closed:
+                    j %= n
+                elif not 0 <= j < n:
+                    break
+                sx, sy, tx, ty, length = segments[j]
+                rx, ry = px - sx, py - sy
+                u = min(max(rx * tx + ry * ty, 0.0), length)
+                fx, fy = rx - tx * u, ry - ty * u
+                d2 = fx * fx + fy * fy
+                if d2 >= best_d2:
+                    break
+                i, best_d2, best_u, best_lat = j, d2, u, tx * fy - ty * fx
+        self._last = i
+        tx, ty = self._tangents_list[i]
+        return self._s0_list[i] + best_u, best_lat, i, tx, ty
 
     def _foot(self, i: int, px: float, py: float) -> tuple[float, float, float]:
         """Distance^2 to segment i, the foot's arc position u, and lateral offset."""

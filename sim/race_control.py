@@ -157,18 +157,46 @@ class RaceControl:
 
     def update(self, t_prev: float, t: float, pose_prev: Pose2D, pose: Pose2D) -> None:
         """Account for one physics step from ``pose_prev`` at ``t_prev`` to ``pose`` at ``t``."""
-        proj = self.progress.project((pose.x, pose.y))
-        self._advance_progress(proj.s)
-        self._check_crossing(t_prev, t, pose_prev, pose, proj.tangent)
-        self._check_off_track(t, pose, proj.lateral, proj.index, proj.tangent)
+        self.update_xy(t_prev, t, (pose_prev.x, pose_prev.y), (pose.x, pose.y, pose.yaw))
+
+    def update_xy(
+        self,
+        t_prev: float,
+        t: float,
+        xy_prev: tuple[float, float],
+        pose: tuple[float, float, float],
+    ) -> None:
+        """:meth:`update` with the CG's previous (x, y) and its (x, y, yaw) now, plain floats."""
+        # Runs every physics step: plain-float maths, the checks written out
+        # here (the helpers below do the same operations, for other callers).
+        p1x, p1y, yaw = pose
+        s, lateral, index, tx, ty = self.progress.project_xy(p1x, p1y)
+        self._advance_progress(s)
+        p0x, p0y = xy_prev
+        if (p1x - p0x) * tx + (p1y - p0y) * ty > 0.0:
+            self._crossed(t_prev, t, (p0x, p0y), (p1x, p1y))
+        # Off track: the lateral offset of each footprint corner is the car's
+        # own plus the corner's offset (rotated into the world) on the
+        # track's left normal (-ty, tx).
+        c, sn = math.cos(yaw), math.sin(yaw)
+        nx, ny = -ty, tx
+        halves = self._half_widths_list
+        half = halves[min(index, len(halves) - 1)]
+        above = below = 0
+        for cx, cy in self._corners_list:
+            lat = lateral + (c * cx - sn * cy) * nx + (sn * cx + c * cy) * ny
+            above += lat > half
+            below += lat < -half
+        self._set_off_track(t, above == 4 or below == 4)
         self._check_stuck(t)
 
     def _advance_progress(self, s: float) -> None:
         assert self._s_last is not None, "RaceControl.start() must be called first"
         ds = s - self._s_last
         if self.progress.closed:
-            half = 0.5 * self.progress.length
-            ds = (ds + half) % self.progress.length - half
+            length = self.progress.length
+            half = 0.5 * length
+            ds = (ds + half) % length - half
         self.state.progress_m += ds
         self._s_last = s
 
@@ -183,16 +211,22 @@ class RaceControl:
         p0x, p0y, p1x, p1y = pose_prev.x, pose_prev.y, pose.x, pose.y
         if (p1x - p0x) * tangent[0] + (p1y - p0y) * tangent[1] <= 0.0:
             return
+        self._crossed(t_prev, t, (p0x, p0y), (p1x, p1y))
+
+    def _crossed(
+        self, t_prev: float, t: float, p0: tuple[float, float], p1: tuple[float, float]
+    ) -> None:
+        """A forward step from ``p0`` to ``p1``: start the clock or count a lap."""
         st = self.state
         if st.clock_start is None:
-            u = segment_crossing_xy((p0x, p0y), (p1x, p1y), self._line_xy)
+            u = segment_crossing_xy(p0, p1, self._line_xy)
             if u is not None:
                 t_cross = t_prev + u * (t - t_prev)
                 st.clock_start = t_cross
                 st.crossing_times.append(t_cross)
                 self._progress_at_crossing = st.progress_m
             return
-        u = segment_crossing_xy((p0x, p0y), (p1x, p1y), self._finish_xy)
+        u = segment_crossing_xy(p0, p1, self._finish_xy)
         if u is None:
             return
         t_cross = t_prev + u * (t - t_prev)
@@ -205,9 +239,6 @@ class RaceControl:
     def _check_off_track(
         self, t: float, pose: Pose2D, lateral: float, index: int, tangent: tuple[float, float]
     ) -> None:
-        # Lateral offset of each footprint corner: the car's own lateral offset
-        # plus the corner's offset (rotated into the world) on the track's left
-        # normal (-ty, tx). Scalar maths: this runs every physics step.
         c, s = math.cos(pose.yaw), math.sin(pose.yaw)
         nx, ny = -tangent[1], tangent[0]
         half = self._half_widths_list[min(index, len(self._half_widths_list) - 1)]
@@ -216,22 +247,27 @@ class RaceControl:
             lat = lateral + (c * cx - s * cy) * nx + (s * cx + c * cy) * ny
             above += lat > half
             below += lat < -half
-        off = above == 4 or below == 4
-        st = self.state
-        if off and not st.is_off_track:
-            st.off_track.append(OffTrackEvent(start=t))
-        elif not off and st.is_off_track:
-            st.off_track[-1].end = t
+        self._set_off_track(t, above == 4 or below == 4)
+
+    def _set_off_track(self, t: float, off: bool) -> None:
+        """Open or close an excursion at ``t``."""
+        events = self.state.off_track
+        on = bool(events) and events[-1].end is None
+        if off and not on:
+            events.append(OffTrackEvent(start=t))
+        elif not off and on:
+            events[-1].end = t
 
     def _check_stuck(self, t: float) -> None:
-        self._history.append((t, self.state.progress_m))
+        history = self._history
+        st = self.state
+        progress = st.progress_m
+        history.append((t, progress))
         horizon = t - self.rules.stuck_time_s
-        while len(self._history) > 1 and self._history[1][0] <= horizon:
-            self._history.popleft()
-        t0, p0 = self._history[0]
-        self.state.stuck = (
-            t0 <= horizon and abs(self.state.progress_m - p0) < self.rules.stuck_progress_m
-        )
+        while len(history) > 1 and history[1][0] <= horizon:
+            history.popleft()
+        t0, p0 = history[0]
+        st.stuck = t0 <= horizon and abs(progress - p0) < self.rules.stuck_progress_m
 
 
 def line_crossings_along(

@@ -264,22 +264,48 @@ class Vehicle:
         )
         self._pre = None
 
-    @property
-    def state(self) -> VehicleState:
-        """The ground-truth state now."""
+    def kinematics(self) -> tuple[float, float, float, float, float, float, float, float, float]:
+        """The state's motion now as plain floats, without building a ``VehicleState``.
+
+        Returns:
+            (x, y, yaw, vx, vy, yaw_rate, ax, ay, yaw_accel), the fields of
+            :attr:`state` with the same values bit for bit (the world reads
+            them every physics step and builds the state only when asked).
+        """
         b = self._body
         yaw = b.angle
         vwx, vwy = b.velocity
         c, s = math.cos(yaw), math.sin(yaw)
         x, y = b.position
         ax, ay, yaw_accel = self._accel
+        return (
+            x,
+            y,
+            (yaw + math.pi) % (2.0 * math.pi) - math.pi,
+            c * vwx + s * vwy,
+            -s * vwx + c * vwy,
+            b.angular_velocity,
+            ax,
+            ay,
+            yaw_accel,
+        )
+
+    @property
+    def steer(self) -> float:
+        """The actual front wheel angle now (after the actuator) [rad]."""
+        return self._steering.angle
+
+    @property
+    def state(self) -> VehicleState:
+        """The ground-truth state now."""
+        x, y, yaw, vx, vy, yaw_rate, ax, ay, yaw_accel = self.kinematics()
         return VehicleState(
             x=x,
             y=y,
-            yaw=(yaw + math.pi) % (2.0 * math.pi) - math.pi,
-            vx=c * vwx + s * vwy,
-            vy=-s * vwx + c * vwy,
-            yaw_rate=b.angular_velocity,
+            yaw=yaw,
+            vx=vx,
+            vy=vy,
+            yaw_rate=yaw_rate,
             steer=self._steering.angle,
             ax=ax,
             ay=ay,

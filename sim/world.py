@@ -128,6 +128,17 @@ class World:
         )
         self.cone_map = ConeMap(track.cones, tuple(str(k) for k in track.kinds))
         self._cone_version = self.cones.version
+        self._cone_positions = self.cones.positions  # a read-only view, current at every step
+        self._cone_kinds = self.cones.kinds
+        # The per-step samples skip the shape checks (TruthSample.trusted):
+        # check these arrays once.
+        TruthSample(
+            0.0,
+            pose,
+            cone_positions=self._cone_positions,
+            cone_kinds=self._cone_kinds,
+            cone_map=self.cone_map,
+        )
         self.space.step(1e-9)  # let pymunk register the bodies before they sleep
         self.cones.sleep_all()
         closed = track.layout == "closed"
@@ -144,9 +155,12 @@ class World:
             car_width=cfg.vehicle.width,
             rules=cfg.rules,
         )
-        self._set_state(self.vehicle.state)
+        self._state: VehicleState | None = None  # built when asked for
+        self._pose: Pose2D | None = None  # likewise
+        self._lever = (cfg.vehicle.antenna_x, cfg.vehicle.antenna_y)
+        self._refresh()
         self._accel_prev = (0.0, 0.0)  # antenna acceleration of the last step, world [m/s^2]
-        self.race.start(0.0, self._pose)
+        self.race.start(0.0, self.pose)
         self.sensors = SensorSuite(cfg.sensor_profile, seed=self.seed, origin=cfg.origin)
         return self.sensors.step(self._truth())
 
@@ -157,23 +171,46 @@ class World:
 
     @property
     def state(self) -> VehicleState:
-        """The car's true state after the last step."""
-        return self._state
+        """The car's true state after the last step (built when first asked for)."""
+        state = self._state
+        if state is None:
+            x, y, yaw, vx, vy, w, ax, ay, dw = self._kin
+            p = self.config.vehicle
+            state = self._state = VehicleState(
+                x, y, yaw, vx, vy, w, self._steer, ax, ay, dw, p.antenna_x, p.antenna_y
+            )
+        return state
 
     @property
     def pose(self) -> Pose2D:
-        """The CG's true pose after the last step (``state.pose``, built once per step)."""
-        return self._pose
+        """The CG's true pose after the last step (``state.pose``, built when asked for)."""
+        pose = self._pose
+        if pose is None:
+            x, y, yaw = self._kin[0], self._kin[1], self._kin[2]
+            pose = self._pose = Pose2D(x, y, yaw)
+        return pose
 
     @property
     def antenna_pose(self) -> Pose2D:
         """The antenna's true pose after the last step (``state.antenna_pose()``, once per step)."""
         return self._antenna_pose
 
-    def _set_state(self, state: VehicleState) -> None:
-        self._state = state
-        self._pose = state.pose
-        self._antenna_pose = state.antenna_pose()
+    def _refresh(self) -> None:
+        """Read the car after a step: its motion as floats, the CG and antenna poses.
+
+        The same values and operations as ``VehicleState.pose`` and
+        ``VehicleState.antenna_pose()``; the ``VehicleState`` itself is built
+        only when :attr:`state` is read.
+        """
+        vehicle = self.vehicle
+        kin = self._kin = vehicle.kinematics()
+        self._steer = vehicle.steer
+        self._state = None
+        x, y, yaw = kin[0], kin[1], kin[2]
+        self._pose = None
+        dx, dy = self._lever
+        c, s = math.cos(yaw), math.sin(yaw)
+        self._antenna_pose = Pose2D(x + c * dx - s * dy, y + s * dx + c * dy, yaw)
 
     @property
     def race_state(self) -> RaceState:
@@ -187,7 +224,8 @@ class World:
     def step(self) -> list[Message]:
         """Advance one physics step; return the measurements delivered now."""
         dt = self._dt
-        prev_pose = self._pose
+        kin = self._kin
+        prev_xy = (kin[0], kin[1])
         vehicle = self.vehicle
         vehicle.pre_step(dt)
         self.space.step(dt)
@@ -195,8 +233,9 @@ class World:
         self.steps += 1
         t = self.steps * dt  # no accumulated round-off: t is exact in steps
         self.cones.update(t)
-        self._set_state(vehicle.state)
-        self.race.update(self.time, t, prev_pose, self._pose)
+        self._refresh()
+        kin = self._kin
+        self.race.update_xy(self.time, t, prev_xy, (kin[0], kin[1], kin[2]))
         self.time = t
         if self.cones.version != self._cone_version:
             self.cone_map.update(self.cones.positions)
@@ -236,27 +275,26 @@ class World:
           turn that turns it by w dt / 2 and an IMU-integrating filter drifts
           by dt w |a| / 2 (13 mm/s per s at 0.75 rad/s, 7 m/s^2).
         """
-        s = self._state
-        rx, ry = s.antenna_x, s.antenna_y
-        w, dw = s.yaw_rate, s.yaw_accel
+        _, _, yaw, vx, _, w, s_ax, s_ay, dw = self._kin
+        rx, ry = self._lever
         dt = self._dt
         yaw_rate = w - dw * dt if self.steps else w
-        ax = s.ax - dw * ry - w * w * rx  # this step's, body frame at mid-step
-        ay = s.ay + dw * rx - w * w * ry
-        yaw_mid = s.yaw - 0.5 * yaw_rate * dt
+        ax = s_ax - dw * ry - w * w * rx  # this step's, body frame at mid-step
+        ay = s_ay + dw * rx - w * w * ry
+        yaw_mid = yaw - 0.5 * yaw_rate * dt
         c, sn = math.cos(yaw_mid), math.sin(yaw_mid)
         awx, awy = c * ax - sn * ay, sn * ax + c * ay
         px, py = self._accel_prev
         self._accel_prev = (awx, awy)
         mx, my = 0.5 * (awx + px), 0.5 * (awy + py)
-        return TruthSample(
-            t=self.time,
-            antenna_pose=self._antenna_pose,
-            speed=s.vx - w * ry - 0.5 * dt * ax,
+        return TruthSample.trusted(
+            self.time,
+            self._antenna_pose,
+            speed=vx - w * ry - 0.5 * dt * ax,
             yaw_rate=yaw_rate,
             accel_x=c * mx + sn * my,
             accel_y=-sn * mx + c * my,
-            cone_positions=self.cones.positions,
-            cone_kinds=self.cones.kinds,
+            cone_positions=self._cone_positions,
+            cone_kinds=self._cone_kinds,
             cone_map=self.cone_map,
         )

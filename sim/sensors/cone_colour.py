@@ -73,7 +73,7 @@ def sample_colours(
     cdf = confusion_cdf[true_class]  # (n, 4)
     reported = np.minimum(np.sum(u[:, None] >= cdf, axis=1), UNKNOWN)
     reported = np.where(coloured, reported, UNKNOWN)
-    labels = [COLOUR_CLASSES[k] for k in reported]
+    labels = [COLOUR_CLASSES[k] for k in reported.tolist()]
     if report_big_orange:
         for i in np.flatnonzero(is_big & (reported == ORANGE)):
             labels[i] = "big_orange"

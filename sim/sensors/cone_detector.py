@@ -66,6 +66,10 @@ from sim.sensors.validation import (
 _CODE_TO_CLASS = np.array([KIND_TO_CLASS[k] for k in CONE_COLOURS], dtype=np.intp)
 _BIG_CODE = CONE_COLOURS.index("big_orange")
 _UNKNOWN_CODE = CONE_COLOURS.index("unknown")
+_NO_POINTS = np.zeros((0, 2))
+_NO_POINTS.setflags(write=False)
+_NO_RANGES = np.zeros(0)
+_NO_RANGES.setflags(write=False)
 
 
 @dataclass(frozen=True)
@@ -210,23 +214,29 @@ class ConeDetector:
         vis = np.flatnonzero(visible)
         sel = vis[self._detect.random(vis.size) < cfg.detection_probability(r[vis])]
 
-        xy = self._add_noise(local[sel], r[sel])
+        r_sel = r[sel]
+        xy = self._add_noise(local[sel], r_sel)
         fp_xy, fp_r = self._false_positives()
-        points_xy = np.vstack([xy, fp_xy])
-        true_r = np.concatenate([r[sel], fp_r])
-        z = (
-            np.concatenate([0.5 * heights[sel], np.full(fp_r.size, 0.5 * SMALL_CONE_HEIGHT)])
-            - cfg.sensor_height
-        )
+        if fp_r.size:
+            points_xy = np.vstack([xy, fp_xy])
+            true_r = np.concatenate([r_sel, fp_r])
+            z = (
+                np.concatenate([0.5 * heights[sel], np.full(fp_r.size, 0.5 * SMALL_CONE_HEIGHT)])
+                - cfg.sensor_height
+            )
+            det_codes = np.concatenate([codes[sel], np.full(fp_r.size, _UNKNOWN_CODE, np.intp)])
+        else:  # the same values without stacking empty arrays (most scans)
+            points_xy, true_r = xy, r_sel
+            z = 0.5 * heights[sel] - cfg.sensor_height
+            det_codes = codes[sel]
         colours = None
         if cfg.report_colour:
-            fp_codes = np.full(fp_r.size, _UNKNOWN_CODE, dtype=np.intp)
-            colours = self._colours(np.concatenate([codes[sel], fp_codes]), true_r)
+            colours = self._colours(det_codes, true_r)
 
         order = np.argsort(np.hypot(points_xy[:, 0], points_xy[:, 1]), kind="stable")
         points = np.column_stack([points_xy, z])[order]
         if colours is not None:
-            colours = tuple(colours[i] for i in order)
+            colours = tuple(colours[i] for i in order.tolist())
         return ConeDetections(Header(truth.t, FRAME_OS_SENSOR), points, colours)
 
     def _add_noise(self, xy: NDArray[np.float64], r: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -236,15 +246,19 @@ class ConeDetector:
         db = cfg.bearing_sigma * self._bearing.standard_normal(r.size)
         scale = 1.0 + np.divide(dr, r, out=np.zeros_like(dr), where=r > 0.0)
         c, s = np.cos(db), np.sin(db)
-        x = scale * (c * xy[:, 0] - s * xy[:, 1])
-        y = scale * (s * xy[:, 0] + c * xy[:, 1])
-        return np.column_stack([x, y])
+        out = np.empty((r.size, 2))
+        x0, y0 = xy[:, 0], xy[:, 1]
+        out[:, 0] = scale * (c * x0 - s * y0)
+        out[:, 1] = scale * (s * x0 + c * y0)
+        return out
 
     def _false_positives(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Poisson-many points uniform over the field of view: (k, 2) [m], (k,) ranges."""
         cfg = self.config
         n = int(self._false.poisson(cfg.false_positive_rate))
         u = self._false.random((n, 2))
+        if n == 0:
+            return _NO_POINTS, _NO_RANGES
         r = np.sqrt(cfg.min_range**2 + u[:, 0] * (cfg.max_range**2 - cfg.min_range**2))
         b = (u[:, 1] - 0.5) * cfg.fov
         return np.column_stack([r * np.cos(b), r * np.sin(b)]), r

@@ -32,7 +32,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from localization.geodesy import DEFAULT_ORIGIN, ReferenceOrigin, local_cartesian_to_gps
+from localization.geodesy import (
+    DEFAULT_ORIGIN,
+    R_EARTH,
+    ReferenceOrigin,
+    local_cartesian_to_gps,
+)
 from localization.messages import FRAME_GPS_ANTENNA, Header, NavSatFix, NavSatStatus
 from sim.sensors.noise import GaussMarkov
 from sim.sensors.streams import stream
@@ -162,7 +167,23 @@ class GpsReceiver:
                 header, nan, nan, nan, np.full((3, 3), nan), status=NavSatStatus.NO_FIX
             )
         pose = truth.antenna_pose
-        lat, lon = local_cartesian_to_gps(pose.x + e[0], pose.y + e[1], self.origin)
+        lat, lon = self._to_gps(float(pose.x + e[0]), float(pose.y + e[1]))
         s = cfg.total_sigma if cfg.reported_sigma is None else cfg.reported_sigma
         cov = np.diag([s * s, s * s, (VERTICAL_TO_HORIZONTAL * s) ** 2])
-        return NavSatFix(header, float(lat), float(lon), self.origin.alt_m, cov, cfg.fix_status)
+        return NavSatFix(header, lat, lon, self.origin.alt_m, cov, cfg.fix_status)
+
+    def _to_gps(self, x: float, y: float) -> tuple[float, float]:
+        """``local_cartesian_to_gps`` of one point on plain floats: (lat, lon) [deg].
+
+        The same operations (``math.degrees`` multiplies by 180 / pi as
+        ``np.degrees`` does); anything out of range goes to the library
+        function, which raises its error.
+        """
+        origin = self.origin
+        ref_lat_r, ref_lon_r = math.radians(origin.lat_deg), math.radians(origin.lon_deg)
+        lat = math.degrees(y / R_EARTH + ref_lat_r)
+        lon = math.degrees(x / (R_EARTH * math.cos(ref_lat_r)) + ref_lon_r)
+        if abs(lat) <= 90.0 and abs(lon) <= 180.0:  # False for NaN and inf
+            return lat, lon
+        lat_a, lon_a = local_cartesian_to_gps(x, y, origin)
+        return float(lat_a), float(lon_a)

@@ -98,6 +98,7 @@ class ImuSensor:
 
     def __init__(self, config: ImuConfig, seed: int) -> None:
         self.config = config
+        self._sigma_cache: tuple[ImuConfig, float, float] | None = None
         self.reset(seed)
 
     def reset(self, seed: int) -> None:
@@ -121,28 +122,37 @@ class ImuSensor:
         acc[2] += truth.accel_y
         self._count += 1
 
+    def _sigmas(self) -> tuple[float, float]:
+        """(gyro, accel) white-noise std of the current config, worked out once per config."""
+        cfg = self.config
+        cached = self._sigma_cache
+        if cached is None or cached[0] is not cfg:
+            cached = self._sigma_cache = (cfg, cfg.gyro_sigma, cfg.accel_sigma)
+        return cached[1], cached[2]
+
     def capture(self, truth: TruthSample) -> Imu:
         """The IMU sample of a capture at ``truth.t``: the mean since the last one."""
-        cfg = self.config
+        t = truth.t
         if self._count:
             n = self._count
-            yaw_rate, accel_x, accel_y = (v / n for v in self._sum)
+            acc = self._sum
+            yaw_rate, accel_x, accel_y = acc[0] / n, acc[1] / n, acc[2] / n
         else:  # captured without observing (a sensor used on its own)
             yaw_rate, accel_x, accel_y = truth.yaw_rate, truth.accel_x, truth.accel_y
         self._sum = [0.0, 0.0, 0.0]
         self._count = 0
-        dt = 0.0 if self._last_t is None else truth.t - self._last_t
-        self._last_t = truth.t
-        bg = float(self._gyro_bias.step(dt)[0])
-        ba = self._accel_bias.step(dt)
-        sg, sa = cfg.gyro_sigma, cfg.accel_sigma
+        dt = 0.0 if self._last_t is None else t - self._last_t
+        self._last_t = t
+        bg = self._gyro_bias.step(dt).tolist()[0]
+        ba0, ba1 = self._accel_bias.step(dt).tolist()
+        sg, sa = self._sigmas()
         wg = float(self._gyro_white.standard_normal())
-        wa = self._accel_white.standard_normal(2)
+        wa0, wa1 = self._accel_white.standard_normal(2).tolist()
         return Imu(
-            header=Header(truth.t, FRAME_GPS_ANTENNA),
-            yaw_rate=yaw_rate + bg + sg * wg,
-            accel_x=accel_x + float(ba[0]) + sa * float(wa[0]),
-            accel_y=accel_y + float(ba[1]) + sa * float(wa[1]),
-            yaw_rate_variance=sg * sg,
-            accel_variance=sa * sa,
+            Header(t, FRAME_GPS_ANTENNA),
+            yaw_rate + bg + sg * wg,
+            accel_x + ba0 + sa * wa0,
+            accel_y + ba1 + sa * wa1,
+            sg * sg,
+            sa * sa,
         )

@@ -73,7 +73,8 @@ class GaussMarkov:
 
     def step(self, dt: float) -> NDArray[np.float64]:
         """Advance by ``dt`` [s] (>= 0) and return the new value, shape (dim,)."""
-        check_non_negative("GaussMarkov.step", "dt", dt, "[s]")
+        if not (dt >= 0.0 and math.isfinite(dt)):
+            check_non_negative("GaussMarkov.step", "dt", dt, "[s]")
         phi = math.exp(-dt / self.tau)
         w = self._rng.standard_normal(self.value.shape)
         self.value = phi * self.value + self.sigma * math.sqrt(1.0 - phi * phi) * w
@@ -97,7 +98,11 @@ class BiasRandomWalk:
 
     def step(self, dt: float) -> NDArray[np.float64]:
         """Advance by ``dt`` [s] (>= 0) and return the new value, shape (dim,)."""
-        check_non_negative("BiasRandomWalk.step", "dt", dt, "[s]")
+        if not (dt >= 0.0 and math.isfinite(dt)):
+            check_non_negative("BiasRandomWalk.step", "dt", dt, "[s]")
         w = self._rng.standard_normal(self.value.shape)
-        self.value = self.value + self.density * math.sqrt(dt) * w
+        if self.density != 0.0:
+            self.value = self.value + self.density * math.sqrt(dt) * w
+        # else b + 0 * w is b bit for bit (b starts at +0 and w is finite); the
+        # draw is still made, so the stream advances as with any density.
         return self.value

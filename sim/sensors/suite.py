@@ -25,6 +25,7 @@ a noise figure) takes a new suite, built from a profile changed with
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections import deque
 from typing import Protocol
 
@@ -98,7 +99,19 @@ class SensorSuite:
         self._queues: list[deque[tuple[float, float, Message]]] = [deque() for _ in self._sensors]
         self._ranks = [DELIVERY_RANK[s.name] for s in self._sensors]
         self._last_t: float | None = None
+        self._plan()
         self.seed = seed
+
+    def _plan(self) -> None:
+        """Note the earliest capture threshold and delivery time of all sensors.
+
+        A step before both captures and delivers nothing (``CaptureClock.due``
+        is False below its threshold), so ``step`` returns at once.
+        """
+        self._next_capture = min(clock.threshold for clock in self._clocks)
+        self._next_delivery = min(
+            (queue[0][0] for queue in self._queues if queue), default=math.inf
+        )
 
     @property
     def profile(self) -> SensorProfile:
@@ -119,6 +132,7 @@ class SensorSuite:
             clock.reset()
             queue.clear()
         self._last_t = None
+        self._plan()
         self.seed = seed
 
     def step(self, truth: TruthSample) -> list[Message]:
@@ -135,17 +149,26 @@ class SensorSuite:
             raise ValueError(f"SensorSuite.step: time must increase, got {t} after {self._last_t}")
         self._last_t = t
         self.imu.observe(truth)  # the integrating IMU sees every step
+        deliver_by = t + TIME_EPS
+        if t < self._next_capture and self._next_delivery > deliver_by:
+            return []  # no clock is due and no queued message is
+        next_capture = math.inf
         for sensor, clock, queue in zip(self._sensors, self._clocks, self._queues, strict=True):
-            if clock.due(t) and sensor.config.enabled:
+            # ``due`` is False, with no side effect, below the threshold.
+            if t >= clock.threshold and clock.due(t) and sensor.config.enabled:
                 message = sensor.capture(truth)
                 if message is not None:
                     queue.append((t + sensor.config.latency, t, message))
+            next_capture = min(next_capture, clock.threshold)
         out: list[tuple[float, int, Message]] = []
-        deliver_by = t + TIME_EPS
+        next_delivery = math.inf
         for rank, queue in zip(self._ranks, self._queues, strict=True):
             while queue and queue[0][0] <= deliver_by:
                 _, stamp, message = queue.popleft()
                 out.append((stamp, rank, message))
+            if queue:
+                next_delivery = min(next_delivery, queue[0][0])
+        self._next_capture, self._next_delivery = next_capture, next_delivery
         if not out:
             return []
         if len(out) > 1:

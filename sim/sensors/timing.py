@@ -80,7 +80,8 @@ class CaptureClock:
     def k(self, value: int) -> None:
         self._k = value
         # ``due`` runs every physics step: its threshold is kept, not recomputed.
-        self._threshold = self.phase + value / self.rate - TIME_EPS
+        # The earliest step time that captures, next_nominal - TIME_EPS [s].
+        self.threshold = self.phase + value / self.rate - TIME_EPS
 
     @property
     def next_nominal(self) -> float:
@@ -94,7 +95,7 @@ class CaptureClock:
         >>> [round(t, 3) for t in (0.0, 0.075, 0.15, 0.225) if clock.due(t)]
         [0.0, 0.15, 0.225]
         """
-        if t < self._threshold:  # next_nominal - TIME_EPS
+        if t < self.threshold:  # next_nominal - TIME_EPS
             return False
         k_next = max(self.k + 1, math.floor((t + TIME_EPS - self.phase) * self.rate) + 1)
         self.skipped += k_next - self.k - 1

@@ -61,3 +61,35 @@ class TruthSample:
             raise ValueError(
                 f"TruthSample.cone_map has {len(self.cone_map)} cones, positions {shape[0]}"
             )
+
+    @classmethod
+    def trusted(
+        cls,
+        t: float,
+        antenna_pose: Pose2D,
+        *,
+        speed: float,
+        yaw_rate: float,
+        accel_x: float,
+        accel_y: float,
+        cone_positions: NDArray[np.float64],
+        cone_kinds: tuple[str, ...],
+        cone_map: ConeMap | None,
+    ) -> TruthSample:
+        """A sample built without the shape checks of ``__init__``.
+
+        For a caller that passes the same, already checked cone arrays at
+        every physics step (``World``); everything else uses the constructor.
+        """
+        self = object.__new__(cls)
+        setattr_ = object.__setattr__
+        setattr_(self, "t", t)
+        setattr_(self, "antenna_pose", antenna_pose)
+        setattr_(self, "speed", speed)
+        setattr_(self, "yaw_rate", yaw_rate)
+        setattr_(self, "accel_x", accel_x)
+        setattr_(self, "accel_y", accel_y)
+        setattr_(self, "cone_positions", cone_positions)
+        setattr_(self, "cone_kinds", cone_kinds)
+        setattr_(self, "cone_map", cone_map)
+        return self

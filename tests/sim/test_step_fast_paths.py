@@ -1,0 +1,126 @@
+"""The per-step fast paths of the world give the answers of the plain ones, bit for bit."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import astuple, fields
+
+import numpy as np
+import pytest
+
+from envs.observation import SensorMemory, build_observation
+from localization.messages import ConeDetections, Header
+from localization.pose import Pose2D
+from sim.progress import PolylineProgress
+from sim.sensors.profiles import get_profile
+from sim.sensors.suite import SensorSuite
+from sim.sensors.truth import TruthSample
+from sim.world import World, WorldConfig
+from tracks import load_track
+
+
+def _wiggle(n: int, rng: np.random.Generator) -> np.ndarray:
+    """A random walk of n points [m], steps of a few centimetres."""
+    return np.cumsum(rng.normal(0.0, 0.2, (n, 2)) + np.array([0.3, 0.0]), axis=0)
+
+
+def test_project_xy_is_project() -> None:
+    rng = np.random.default_rng(4)
+    theta = np.linspace(0.0, 2 * math.pi, 80, endpoint=False)
+    circle = 20.0 * np.column_stack([np.cos(theta), np.sin(theta)])
+    for points, closed in ((circle, True), (circle[:50], False)):
+        a, b = PolylineProgress(points, closed), PolylineProgress(points, closed)
+        path = 20.0 * np.column_stack([np.cos(theta), np.sin(theta)])
+        path = np.vstack([path, _wiggle(200, rng) + path[-1]])
+        for x, y in path:
+            proj = a.project((float(x), float(y)))
+            got = b.project_xy(float(x), float(y))
+            assert got == (proj.s, proj.lateral, proj.index, *proj.tangent)
+
+
+def test_world_state_and_truth_match_the_vehicle_state() -> None:
+    world = World(load_track("autocross"), WorldConfig(sensors="rtk"), seed=2)
+    world.set_command(0.3, 3.0)
+    truths: list[TruthSample] = []
+    suite_step = world.sensors.step
+
+    def spy(truth: TruthSample) -> list:
+        truths.append(truth)
+        return suite_step(truth)
+
+    world.sensors.step = spy  # type: ignore[method-assign]
+    for _ in range(300):
+        world.step()
+        state = world.vehicle.state
+        assert astuple(world.state) == astuple(state)
+        assert world.pose == state.pose
+        assert world.antenna_pose == state.antenna_pose()
+        assert world.vehicle.kinematics() == (
+            state.x,
+            state.y,
+            state.yaw,
+            state.vx,
+            state.vy,
+            state.yaw_rate,
+            state.ax,
+            state.ay,
+            state.yaw_accel,
+        )
+    last = truths[-1]
+    checked = TruthSample(**{f.name: getattr(last, f.name) for f in fields(TruthSample)})
+    for f in fields(TruthSample):
+        assert getattr(checked, f.name) is getattr(last, f.name)
+    assert last.cone_positions.shape == (len(last.cone_kinds), 2)
+
+
+def _circle_truth(t: float) -> TruthSample:
+    theta = t / 3.0
+    pose = Pose2D(30.0 * math.cos(theta), 30.0 * math.sin(theta), theta + math.pi / 2)
+    angles = np.linspace(0.0, 2 * math.pi, 100, endpoint=False)
+    cones = np.vstack([r * np.column_stack([np.cos(angles), np.sin(angles)]) for r in (28.0, 32.0)])
+    return TruthSample(t, pose, 10.0, 1 / 3.0, 0.0, 10.0 / 3.0, cones, ("blue",) * 200)
+
+
+def test_suite_early_return_changes_nothing() -> None:
+    profile = get_profile("consumer")
+    fast, slow = SensorSuite(profile, seed=3), SensorSuite(profile, seed=3)
+    for k in range(1, 801):
+        truth = _circle_truth(k / 200.0)
+        slow._next_capture = -math.inf  # never take the early return
+        got, want = fast.step(truth), slow.step(truth)
+        assert [repr(m) for m in got] == [repr(m) for m in want]
+
+
+def test_observation_cone_block_follows_the_detection() -> None:
+    memory = SensorMemory()
+    action = np.zeros(2, dtype=np.float32)
+    empty = build_observation(memory, None, action, 4, "vector")
+    det = ConeDetections(
+        Header(0.1, "os_sensor"), np.array([[1.0, 2.0, 0.0], [3.0, -1.0, 0.0]]), ("blue", "yellow")
+    )
+    memory.update([det])
+    first = build_observation(memory, None, action, 4, "dict")
+    assert isinstance(first, dict)
+    assert first["cone_mask"].tolist() == [1.0, 1.0, 0.0, 0.0]
+    first["cones"][:] = 99.0  # the caller's copy, not the cached block
+    again = build_observation(memory, None, action, 4, "dict")
+    assert isinstance(again, dict)
+    assert again["cones"][:2].tolist() == [[1.0, 2.0], [3.0, -1.0]]
+    vec = build_observation(memory, None, action, 4, "vector")
+    assert vec[6:12].tolist() == [1.0, 2.0, 1.0, 3.0, -1.0, 1.0]
+    memory.update([ConeDetections(Header(0.2, "os_sensor"), np.zeros((0, 3)), ())])
+    assert build_observation(memory, None, action, 4, "vector").tolist() == empty.tolist()
+
+
+def test_gps_scalar_conversion_is_the_library_one() -> None:
+    from localization.geodesy import GeodesyError, local_cartesian_to_gps
+    from sim.sensors.gps import GpsReceiver
+
+    gps = GpsReceiver(get_profile("rtk").gps, 0)
+    rng = np.random.default_rng(7)
+    for x, y in rng.uniform(-5e4, 5e4, (2000, 2)).tolist():
+        lat, lon = local_cartesian_to_gps(x, y, gps.origin)
+        assert gps._to_gps(x, y) == (float(lat), float(lon))
+    for bad in (math.nan, math.inf, 1e9):
+        with pytest.raises(GeodesyError):
+            gps._to_gps(0.0, bad)
