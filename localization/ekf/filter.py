@@ -49,7 +49,10 @@ formulation (``tests/localization/test_ekf_regression.py``):
   ``estimate``, ``health``), so a fix and a heading stamped together and
   delivered together replay once instead of twice;
 * ``estimate(t)`` is cached per stamp and state (the env asks several times
-  per control step).
+  per control step), and shares its arrays (the snapshot's, or the ones just
+  predicted for it) instead of copying them;
+* ``P`` is re-symmetrised by a compiled kernel (:mod:`.kernels`), the same
+  operations as ``0.5 * (P + P.T)``.
 """
 
 from __future__ import annotations
@@ -62,6 +65,7 @@ from filterpy.kalman import ExtendedKalmanFilter
 from numpy.typing import NDArray
 from scipy.stats import chi2
 
+from localization.ekf import kernels
 from localization.ekf import model as m
 from localization.ekf.config import EkfConfig
 from localization.ekf.estimate import Estimate
@@ -140,8 +144,7 @@ def propagate(snap: Snapshot, t: float, step: m.MotionStep) -> tuple[FloatArray,
         return snap.x, snap.P
     x1, f, q = step(snap.x, snap.u, snap.u_cov, dt)
     x1[m.YAW, 0] = m.wrap_yaw(x1.item(m.YAW))
-    p1 = np.dot(f, snap.P).dot(f.T) + q
-    return x1, 0.5 * (p1 + p1.T)
+    return x1, kernels.symmetrised(np.dot(f, snap.P).dot(f.T) + q)
 
 
 class FusionEkf:
@@ -259,7 +262,8 @@ class FusionEkf:
         t = snap.t if stamp is None else stamp
         x, p = propagate(snap, t, self._step)
         yaw_rate = snap.u.item(0) - x.item(m.GYRO_BIAS)
-        est = Estimate.from_state(t, x, p, yaw_rate, self.layout.names)
+        # x, p: the snapshot's (read-only) arrays or new ones only this estimate holds.
+        est = Estimate.from_state(t, x, p, yaw_rate, self.layout.names, copy=False)
         if len(self._estimates) >= ESTIMATE_CACHE_SIZE:
             self._estimates.clear()
         self._estimates[stamp] = (snap, est)
@@ -491,7 +495,7 @@ class FusionEkf:
         """Wrap yaw and re-symmetrise P after a predict or an update (both new arrays)."""
         ekf = self._ekf
         ekf.x[m.YAW, 0] = m.wrap_yaw(ekf.x.item(m.YAW))
-        ekf.P = 0.5 * (ekf.P + ekf.P.T)
+        ekf.P = kernels.symmetrised(ekf.P)  # 0.5 * (P + P'), compiled
 
     def _snapshot(self) -> Snapshot:
         """The filter's state, sharing its arrays (made read-only)."""

@@ -1,4 +1,4 @@
-"""Compiled kernel (numba) for the fusion EKF's motion step.
+"""Compiled kernels (numba) for the fusion EKF's motion step and covariance tidying.
 
 Why: :class:`~localization.ekf.model.MotionStep` runs for every IMU sample,
 every replayed one and every estimate ahead (about 4 per env step, more with
@@ -9,7 +9,9 @@ does the same work in one compiled call: x' = f(x, u, dt), the entries of F,
 of the input Jacobian G and of Q's model terms, written into arrays the
 caller owns. The two matrix products of Q (G Sigma G') stay with numpy in the
 caller: numpy's BLAS uses fused multiply-adds, which a loop here would not
-reproduce bit for bit.
+reproduce bit for bit. :func:`symmetrised` is the ``0.5 * (P + P')`` the
+filter applies after every predict and update, in one call instead of three
+numpy operations.
 
 Same numbers: the kernel does the same IEEE operations in the same order as
 ``MotionStep``'s Python did (and as ``motion_model``, ``jacob_f`` and
@@ -32,6 +34,7 @@ import math
 import warnings
 from typing import Final
 
+import numpy as np
 from numba import njit
 
 # Layout of ``motion_terms``'s ``params``.
@@ -172,3 +175,14 @@ def motion_terms(x, u, dt, g, h, params, out, f, gu, qm):  # noqa: PLR0917
         qm[g + 1, g + 1] = qg
     if h >= 0:
         qm[h, h] = params[HEADING_VAR] * (1.0 - phi_h * phi_h)
+
+
+@_compiled
+def symmetrised(p):
+    """``0.5 * (p + p.T)`` as a new array: the same two operations per element as numpy's."""
+    n = p.shape[0]
+    out = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = 0.5 * (p[i, j] + p[j, i])
+    return out
