@@ -84,6 +84,8 @@ _log = logging.getLogger("localization.ekf")
 # Per-sample input covariance assumed before the first IMU sample [rad^2/s^2, m^2/s^4].
 NO_IMU_COV = np.diag([1.0, 100.0, 100.0])
 NO_IMU_COV.flags.writeable = False
+NO_IMU_INPUT = np.zeros(3)  # the input held before the first IMU sample
+NO_IMU_INPUT.flags.writeable = False  # read-only as every sample's (one kernel specialisation)
 
 
 class NotInitialisedError(RuntimeError):
@@ -164,6 +166,7 @@ class FusionEkf:
         self._health = Health()
         self._process = self.config.process_model()
         self._step = m.MotionStep(self._process)
+        kernels.warm_up(self._step, NO_IMU_INPUT, NO_IMU_COV)
         self._gates = {dof: float(chi2.ppf(self.config.gate_probability, dof)) for dof in (1, 2)}
         self._ekf = _FilterpyEkf(self.layout.n)
         self._h_position = _freeze(m.jacob_h_position(self._ekf.x, self.layout))  # constant
@@ -180,7 +183,7 @@ class FusionEkf:
         self._history = None
         self._pending: list[Measurement] = []
         self._t = 0.0
-        self._u = np.zeros(3)
+        self._u = NO_IMU_INPUT
         self._u_cov = NO_IMU_COV
         self._gps_rejections_in_row = 0
         self._estimates: dict[float | None, tuple[Snapshot, Estimate]] = {}
@@ -300,7 +303,7 @@ class FusionEkf:
             return
         wheel = self._nearest(Sensor.WHEEL_SPEED, fix.stamp)
         imus = [q for q in self._pending if q.sensor == Sensor.IMU and q.stamp <= fix.stamp]
-        u, u_cov = (imus[-1].z, imus[-1].cov) if imus else (np.zeros(3), NO_IMU_COV)
+        u, u_cov = (imus[-1].z, imus[-1].cov) if imus else (NO_IMU_INPUT, NO_IMU_COV)
         x, p = self._initial_state(fix, heading, wheel)
         base = Snapshot(fix.stamp, _freeze(x), _freeze(p), u, u_cov)
         history = History(base, self.config.history_window)

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from typing import Final
+from typing import Any, Final
 
 import numpy as np
 from numba import njit
@@ -186,3 +186,21 @@ def symmetrised(p):
         for j in range(n):
             out[i, j] = 0.5 * (p[i, j] + p[j, i])
     return out
+
+
+def warm_up(step: Any, u: Any, u_cov: Any) -> None:
+    """Call each kernel once, as the filter will (read-only state and input).
+
+    numba initialises itself and loads (or compiles) the machine code on a
+    kernel's first call: about 0.3 s in a process that has used no numba
+    yet. Called when a filter is built, so that this happens there rather
+    than in its first predict (inside a timed loop, say). ``step`` is a
+    ``MotionStep`` (its arrays are overwritten by every call, so the call
+    leaves nothing behind); ``u`` and ``u_cov`` a read-only input and its
+    covariance.
+    """
+    n = step.model.layout.n
+    x = np.zeros((n, 1))
+    x.flags.writeable = False
+    step(x, u, u_cov, 0.01)
+    symmetrised(np.eye(n))
