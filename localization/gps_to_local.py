@@ -25,7 +25,7 @@ import logging
 import math
 from collections import Counter
 
-from localization.geodesy import DEFAULT_ORIGIN, GeodesyError, ReferenceOrigin
+from localization.geodesy import DEFAULT_ORIGIN, R_EARTH, GeodesyError, ReferenceOrigin
 from localization.geodesy import gps_to_local_cartesian as project
 from localization.messages import FRAME_REFERENCE, Header, NavSatFix, NavSatStatus, PointStamped
 
@@ -48,8 +48,18 @@ def gps_to_local_cartesian(
     Raises:
         GeodesyError: NaN, infinite or out-of-range latitude/longitude.
     """
-    x, y = project(fix.latitude, fix.longitude, origin)
-    return PointStamped(Header(fix.header.stamp, frame_id), float(x), float(y), 0.0)
+    lat, lon = fix.latitude, fix.longitude
+    if type(lat) is float and type(lon) is float and abs(lat) <= 90.0 and abs(lon) <= 180.0:
+        # One fix on floats: ``project``'s arithmetic, operation for operation (numpy's
+        # ``radians`` is the same single multiplication as ``math.radians``), without
+        # its array overhead. NaN fails the range test and takes ``project``, which raises.
+        ref_lat_r, ref_lon_r = math.radians(origin.lat_deg), math.radians(origin.lon_deg)
+        x = (math.radians(lon) - ref_lon_r) * math.cos(ref_lat_r) * R_EARTH
+        y = (math.radians(lat) - ref_lat_r) * R_EARTH
+    else:
+        xs, ys = project(lat, lon, origin)
+        x, y = float(xs), float(ys)
+    return PointStamped(Header(fix.header.stamp, frame_id), x, y, 0.0)
 
 
 class GpsToLocalCartesian:

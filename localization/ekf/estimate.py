@@ -41,11 +41,29 @@ class Estimate:
 
     @classmethod
     def from_state(
-        cls, stamp: float, x: FloatArray, p: FloatArray, yaw_rate: float, names: tuple[str, ...]
+        cls,
+        stamp: float,
+        x: FloatArray,
+        p: FloatArray,
+        yaw_rate: float,
+        names: tuple[str, ...],
+        *,
+        copy: bool = True,
     ) -> Estimate:
-        """Build from a state (n, 1) and covariance (n, n); the arrays are copied read-only."""
-        state = np.array(x, dtype=float).reshape(-1)
-        cov = np.array(p, dtype=float)
+        """Build from a state (n, 1) and covariance (n, n), held read-only.
+
+        Args:
+            copy: copy the arrays (default). False shares them (``state`` a view
+                of ``x``) and makes them read-only: for float64 arrays that are
+                read-only already or that no one else holds (the filter's).
+        """
+        if copy:
+            state = np.array(x, dtype=float).reshape(-1)
+            cov = np.array(p, dtype=float)
+        else:
+            x.flags.writeable = False
+            state = x.reshape(-1)
+            cov = p
         pose_cov = cov[X : YAW + 1, X : YAW + 1].copy()
         for a in (state, cov, pose_cov):
             a.flags.writeable = False

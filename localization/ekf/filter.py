@@ -49,7 +49,10 @@ formulation (``tests/localization/test_ekf_regression.py``):
   ``estimate``, ``health``), so a fix and a heading stamped together and
   delivered together replay once instead of twice;
 * ``estimate(t)`` is cached per stamp and state (the env asks several times
-  per control step).
+  per control step), and shares its arrays (the snapshot's, or the ones just
+  predicted for it) instead of copying them;
+* ``P`` is re-symmetrised by a compiled kernel (:mod:`.kernels`), the same
+  operations as ``0.5 * (P + P.T)``.
 """
 
 from __future__ import annotations
@@ -62,6 +65,7 @@ from filterpy.kalman import ExtendedKalmanFilter
 from numpy.typing import NDArray
 from scipy.stats import chi2
 
+from localization.ekf import kernels
 from localization.ekf import model as m
 from localization.ekf.config import EkfConfig
 from localization.ekf.estimate import Estimate
@@ -80,6 +84,8 @@ _log = logging.getLogger("localization.ekf")
 # Per-sample input covariance assumed before the first IMU sample [rad^2/s^2, m^2/s^4].
 NO_IMU_COV = np.diag([1.0, 100.0, 100.0])
 NO_IMU_COV.flags.writeable = False
+NO_IMU_INPUT = np.zeros(3)  # the input held before the first IMU sample
+NO_IMU_INPUT.flags.writeable = False  # read-only as every sample's (one kernel specialisation)
 
 
 class NotInitialisedError(RuntimeError):
@@ -140,8 +146,7 @@ def propagate(snap: Snapshot, t: float, step: m.MotionStep) -> tuple[FloatArray,
         return snap.x, snap.P
     x1, f, q = step(snap.x, snap.u, snap.u_cov, dt)
     x1[m.YAW, 0] = m.wrap_yaw(x1.item(m.YAW))
-    p1 = np.dot(f, snap.P).dot(f.T) + q
-    return x1, 0.5 * (p1 + p1.T)
+    return x1, kernels.symmetrised(np.dot(f, snap.P).dot(f.T) + q)
 
 
 class FusionEkf:
@@ -161,6 +166,7 @@ class FusionEkf:
         self._health = Health()
         self._process = self.config.process_model()
         self._step = m.MotionStep(self._process)
+        kernels.warm_up(self._step, NO_IMU_INPUT, NO_IMU_COV)
         self._gates = {dof: float(chi2.ppf(self.config.gate_probability, dof)) for dof in (1, 2)}
         self._ekf = _FilterpyEkf(self.layout.n)
         self._h_position = _freeze(m.jacob_h_position(self._ekf.x, self.layout))  # constant
@@ -177,7 +183,7 @@ class FusionEkf:
         self._history = None
         self._pending: list[Measurement] = []
         self._t = 0.0
-        self._u = np.zeros(3)
+        self._u = NO_IMU_INPUT
         self._u_cov = NO_IMU_COV
         self._gps_rejections_in_row = 0
         self._estimates: dict[float | None, tuple[Snapshot, Estimate]] = {}
@@ -259,7 +265,8 @@ class FusionEkf:
         t = snap.t if stamp is None else stamp
         x, p = propagate(snap, t, self._step)
         yaw_rate = snap.u.item(0) - x.item(m.GYRO_BIAS)
-        est = Estimate.from_state(t, x, p, yaw_rate, self.layout.names)
+        # x, p: the snapshot's (read-only) arrays or new ones only this estimate holds.
+        est = Estimate.from_state(t, x, p, yaw_rate, self.layout.names, copy=False)
         if len(self._estimates) >= ESTIMATE_CACHE_SIZE:
             self._estimates.clear()
         self._estimates[stamp] = (snap, est)
@@ -296,7 +303,7 @@ class FusionEkf:
             return
         wheel = self._nearest(Sensor.WHEEL_SPEED, fix.stamp)
         imus = [q for q in self._pending if q.sensor == Sensor.IMU and q.stamp <= fix.stamp]
-        u, u_cov = (imus[-1].z, imus[-1].cov) if imus else (np.zeros(3), NO_IMU_COV)
+        u, u_cov = (imus[-1].z, imus[-1].cov) if imus else (NO_IMU_INPUT, NO_IMU_COV)
         x, p = self._initial_state(fix, heading, wheel)
         base = Snapshot(fix.stamp, _freeze(x), _freeze(p), u, u_cov)
         history = History(base, self.config.history_window)
@@ -491,7 +498,7 @@ class FusionEkf:
         """Wrap yaw and re-symmetrise P after a predict or an update (both new arrays)."""
         ekf = self._ekf
         ekf.x[m.YAW, 0] = m.wrap_yaw(ekf.x.item(m.YAW))
-        ekf.P = 0.5 * (ekf.P + ekf.P.T)
+        ekf.P = kernels.symmetrised(ekf.P)  # 0.5 * (P + P'), compiled
 
     def _snapshot(self) -> Snapshot:
         """The filter's state, sharing its arrays (made read-only)."""

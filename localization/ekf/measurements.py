@@ -15,6 +15,10 @@ as a Gauss-Markov state (``EkfConfig.gps_bias_sigma``, ``heading_bias_sigma``)
 gets that part subtracted, and every measurement covariance is floored
 (``*_sigma_floor``) so that an ideal sensor stating zero does not make the
 covariance singular.
+
+Sensors state the same covariance message after message: each covariance is
+built (and a fix's checked) once per distinct stated value, and the read-only
+array is shared by the measurements that use it.
 """
 
 from __future__ import annotations
@@ -144,6 +148,27 @@ def _frozen(a: FloatArray) -> FloatArray:
     return a
 
 
+# Covariances already built, by everything they are computed from (exact bits: the
+# stated values' bytes or the floats with their signs). Sensors state the same
+# covariance message after message, so the check, the bias subtraction and the
+# floor run once; the (read-only) array is shared by every measurement that uses it.
+_COVARIANCES: dict[tuple[object, ...], FloatArray] = {}
+_COVARIANCES_SIZE = 64  # entries kept before the cache is cleared
+
+
+def _remember(key: tuple[object, ...], cov: FloatArray) -> FloatArray:
+    """Keep ``cov`` (made read-only) for ``key``, and return it."""
+    if len(_COVARIANCES) >= _COVARIANCES_SIZE:
+        _COVARIANCES.clear()
+    _COVARIANCES[key] = _frozen(cov)
+    return cov
+
+
+def _sign(value: float) -> float:
+    """+1.0 or -1.0 (tells 0.0 from -0.0 in a cache key, where the two compare equal)."""
+    return math.copysign(1.0, value)
+
+
 def from_imu(msg: Imu, cfg: EkfConfig) -> Measurement:
     """The filter's input u = (w_m, a_x, a_y) and its per-sample covariance."""
     stamp = msg.header.stamp
@@ -154,10 +179,15 @@ def from_imu(msg: Imu, cfg: EkfConfig) -> Measurement:
     _check_variance(Sensor.IMU, stamp, msg.yaw_rate_variance, "yaw_rate_variance")
     _check_variance(Sensor.IMU, stamp, msg.accel_variance, "accel_variance")
     u = np.array((w, ax, ay), dtype=float)
-    cov = np.zeros((3, 3))
-    cov[0, 0] = msg.yaw_rate_variance
-    cov[1, 1] = cov[2, 2] = msg.accel_variance
-    return Measurement(Sensor.IMU, stamp, _frozen(u), _frozen(cov))
+    w_var, a_var = msg.yaw_rate_variance, msg.accel_variance
+    key = ("imu", w_var, a_var, _sign(w_var), _sign(a_var))
+    cov = _COVARIANCES.get(key)
+    if cov is None:
+        cov = np.zeros((3, 3))
+        cov[0, 0] = w_var
+        cov[1, 1] = cov[2, 2] = a_var
+        cov = _remember(key, cov)
+    return Measurement(Sensor.IMU, stamp, _frozen(u), cov)
 
 
 def from_fix(msg: NavSatFix, cfg: EkfConfig) -> Measurement:
@@ -167,15 +197,18 @@ def from_fix(msg: NavSatFix, cfg: EkfConfig) -> Measurement:
     if msg.status == NavSatStatus.NO_FIX:
         raise InvalidMessage(Sensor.GPS, RejectReason.NO_FIX, stamp, "no fix")
     full = np.asarray(msg.position_covariance, dtype=float)
-    _check_covariance(Sensor.GPS, stamp, full, "position_covariance")
+    key = ("fix", full.shape, full.tobytes(), cfg.gps_bias_sigma, cfg.gps_sigma_floor)
+    cov = _COVARIANCES.get(key)  # only a covariance that passed the checks is kept
+    if cov is None:
+        _check_covariance(Sensor.GPS, stamp, full, "position_covariance")
+        horizontal = full[:2, :2] - cfg.gps_bias_sigma**2 * np.eye(2)
+        cov = _remember(key, _floored(horizontal, cfg.gps_sigma_floor))
     try:
         point = gps_to_local_cartesian(msg, cfg.origin, cfg.reference_frame)
     except GeodesyError as err:
         raise InvalidMessage(Sensor.GPS, RejectReason.NON_FINITE, stamp, str(err)) from None
-    horizontal = full[:2, :2] - cfg.gps_bias_sigma**2 * np.eye(2)
-    cov = _floored(horizontal, cfg.gps_sigma_floor)
     z = np.array([[point.x], [point.y]])
-    return Measurement(Sensor.GPS, stamp, _frozen(z), _frozen(cov))
+    return Measurement(Sensor.GPS, stamp, _frozen(z), cov)
 
 
 def _scalar(
@@ -192,8 +225,12 @@ def _scalar(
         raise InvalidMessage(sensor, RejectReason.NON_FINITE, stamp, "value not finite")
     _check_variance(sensor, stamp, variance, "variance")
     z = np.array([[value]], dtype=float)
-    cov = np.array([[max(variance - bias_sigma * bias_sigma, floor * floor)]])
-    return Measurement(sensor, stamp, _frozen(z), _frozen(cov))
+    var = max(variance - bias_sigma * bias_sigma, floor * floor)
+    key = ("scalar", var, _sign(var))
+    cov = _COVARIANCES.get(key)
+    if cov is None:
+        cov = _remember(key, np.array([[var]]))
+    return Measurement(sensor, stamp, _frozen(z), cov)
 
 
 def from_heading(msg: HeadingStamped, cfg: EkfConfig) -> Measurement:

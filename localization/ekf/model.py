@@ -89,10 +89,12 @@ Observation models (z = h(x) + noise), with H = dh/dx
 
 Written for speed: :class:`MotionStep` is the filter's hot path (every IMU
 sample, every replay, every estimate ahead). It evaluates :func:`motion_model`,
-:func:`jacob_f` and :func:`process_noise` in one pass over plain floats, with
-the same expressions in the same order (so the same numbers, bit for bit),
-sharing the trigonometry and writing F into an array it owns. The functions
-above stay the readable reference (the tests check the two agree).
+:func:`jacob_f` and :func:`process_noise` in one compiled pass over floats
+(:func:`localization.ekf.kernels.motion_terms`, numba), with the same
+expressions in the same order (so the same numbers, bit for bit), sharing the
+trigonometry and writing F, G and Q's model terms into arrays it owns; only
+Q's G Sigma G' is left to numpy (its BLAS products). The functions above stay
+the readable reference (the tests check the two agree).
 """
 
 from __future__ import annotations
@@ -103,6 +105,8 @@ from typing import Final
 
 import numpy as np
 from numpy.typing import NDArray
+
+from localization.ekf import kernels
 
 FloatArray = NDArray[np.float64]
 
@@ -407,16 +411,21 @@ class MotionStep:
         self._f = np.eye(n)  # F; the same entries are overwritten by every call
         self._g = np.zeros((n, 3))  # G; rows x..vy overwritten by every call, the rest stay 0
         self._qm = np.zeros((n, n))  # Q's model terms; likewise
-        self._gps_bias = layout.gps_bias_index
-        self._heading_bias = layout.heading_bias_index
+        g, h = layout.gps_bias_index, layout.heading_bias_index
+        self._g_index = -1 if g is None else g
+        self._h_index = -1 if h is None else h
         self._imu_period = model.imu_period
-        self._gps_tau, self._heading_tau = model.gps_bias_tau, model.heading_bias_tau
-        self._qa = model.accel_model_density**2
-        self._qw = model.yaw_model_density**2
-        self._qb = model.gyro_bias_walk**2
-        self._qs = model.wheel_scale_walk**2
-        self._gps_var = model.gps_bias_sigma**2
-        self._heading_var = model.heading_bias_sigma**2
+        params = np.zeros(kernels.N_PARAMS)
+        params[kernels.GPS_TAU] = model.gps_bias_tau
+        params[kernels.HEADING_TAU] = model.heading_bias_tau
+        params[kernels.QA] = model.accel_model_density**2
+        params[kernels.QW] = model.yaw_model_density**2
+        params[kernels.QB] = model.gyro_bias_walk**2
+        params[kernels.QS] = model.wheel_scale_walk**2
+        params[kernels.GPS_VAR] = model.gps_bias_sigma**2
+        params[kernels.HEADING_VAR] = model.heading_bias_sigma**2
+        params.flags.writeable = False
+        self._params = params
 
     def __call__(
         self, x: FloatArray, u: FloatArray, u_cov: FloatArray, dt: float
@@ -433,85 +442,9 @@ class MotionStep:
             (x' (n, 1), new and unwrapped as from :func:`motion_model`; F (n, n),
             an array this object overwrites on its next call; Q (n, n), new).
         """
-        # -- the floats every term shares (names as in motion_model and jacob_f) --
-        px, py, yaw = x.item(X), x.item(Y), x.item(YAW)
-        vx, vy, bias = x.item(VX), x.item(VY), x.item(GYRO_BIAS)
-        w_m, ax, ay = u.tolist()
-        w = w_m - bias
-        half = 0.5 * dt * dt
-        cube = dt**3
-        c, s = math.cos(yaw), math.sin(yaw)
-        mid = yaw + 0.5 * w * dt
-        cm, sm = math.cos(mid), math.sin(mid)
-        turn = -w * dt  # R(turn) = R(-w dt)
-        c1, s1 = math.cos(turn), math.sin(turn)
-        turn_half = -0.5 * w * dt  # R(-w dt / 2)
-        c2, s2 = math.cos(turn_half), math.sin(turn_half)
-        vex, vey = c * vx - s * vy, s * vx + c * vy  # R(yaw) v
-        aex, aey = cm * ax - sm * ay, sm * ax + cm * ay  # R(mid) a
-        sv0, sv1 = c * -vy - s * vx, s * -vy + c * vx  # R(yaw) S v
-        sa0, sa1 = cm * -ay - sm * ax, sm * -ay + cm * ax  # R(mid) S a
-        dv0 = dt * (c1 * -vy - s1 * vx) + half * (c2 * -ay - s2 * ax)  # dv'/dgyro_bias
-        dv1 = dt * (s1 * -vy + c1 * vx) + half * (s2 * -ay + c2 * ax)
-        g, h = self._gps_bias, self._heading_bias
-        phi_g = math.exp(-dt / self._gps_tau) if g is not None else 1.0
-        phi_h = math.exp(-dt / self._heading_tau) if h is not None else 1.0
-
-        # -- x' = f(x, u, dt) --
-        out = x.copy()
-        out[X, 0] = px + (dt * vex + half * aex)
-        out[Y, 0] = py + (dt * vey + half * aey)
-        out[YAW, 0] = yaw + w * dt
-        out[VX, 0] = (c1 * vx - s1 * vy) + dt * (c2 * ax - s2 * ay)
-        out[VY, 0] = (s1 * vx + c1 * vy) + dt * (s2 * ax + c2 * ay)
-        if g is not None:
-            out[g, 0] *= phi_g
-            out[g + 1, 0] *= phi_g
-        if h is not None:
-            out[h, 0] *= phi_h
-
-        # -- F = df/dx (identity elsewhere) --
-        cw, sw = math.cos(w * dt), math.sin(w * dt)
-        f = self._f
-        f[X, YAW] = dt * sv0 + half * sa0
-        f[Y, YAW] = dt * sv1 + half * sa1
-        f[X, VX], f[X, VY], f[Y, VX], f[Y, VY] = dt * c, -dt * s, dt * s, dt * c
-        f[X, GYRO_BIAS] = -0.25 * cube * sa0
-        f[Y, GYRO_BIAS] = -0.25 * cube * sa1
-        f[YAW, GYRO_BIAS] = -dt
-        f[VX, VX], f[VX, VY], f[VY, VX], f[VY, VY] = cw, sw, -sw, cw
-        f[VX, GYRO_BIAS], f[VY, GYRO_BIAS] = dv0, dv1
-        if g is not None:
-            f[g, g] = f[g + 1, g + 1] = phi_g
-        if h is not None:
-            f[h, h] = phi_h
-
-        # -- Q = G (Sigma_u T / dt) G' + the model terms --
-        ch, sh = math.cos(0.5 * w * dt), math.sin(0.5 * w * dt)
-        gu = self._g
-        gu[X, 0] = 0.25 * cube * sa0
-        gu[Y, 0] = 0.25 * cube * sa1
-        gu[X, 1], gu[X, 2], gu[Y, 1], gu[Y, 2] = half * cm, -half * sm, half * sm, half * cm
-        gu[YAW, 0] = dt
-        gu[VX, 0], gu[VY, 0] = -dv0, -dv1
-        gu[VX, 1], gu[VX, 2], gu[VY, 1], gu[VY, 2] = dt * ch, dt * sh, -dt * sh, dt * ch
+        out = np.empty_like(x)
+        f, gu, qm = self._f, self._g, self._qm
+        kernels.motion_terms(x, u, dt, self._g_index, self._h_index, self._params, out, f, gu, qm)
         q = np.dot(np.dot(gu, u_cov * (self._imu_period / dt)), gu.T)  # less overhead than @
-        qm = self._qm  # the model terms, each added once as process_noise adds them
-        qa = self._qa
-        if qa > 0.0:
-            pp = qa * cube / 3.0
-            pv = qa * dt * dt / 2.0
-            qm[X, X] = qm[Y, Y] = pp
-            qm[X, VX] = qm[Y, VY] = qm[VX, X] = qm[VY, Y] = pv * c
-            qm[Y, VX] = qm[VX, Y] = pv * s
-            qm[X, VY] = qm[VY, X] = pv * -s
-            qm[VX, VX] = qm[VY, VY] = qa * dt
-        qm[YAW, YAW] = self._qw * dt
-        qm[GYRO_BIAS, GYRO_BIAS] = self._qb * dt
-        qm[WHEEL_SCALE, WHEEL_SCALE] = self._qs * dt
-        if g is not None:
-            qm[g, g] = qm[g + 1, g + 1] = self._gps_var * (1.0 - phi_g * phi_g)
-        if h is not None:
-            qm[h, h] = self._heading_var * (1.0 - phi_h * phi_h)
         q += qm
         return out, f, q

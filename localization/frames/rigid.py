@@ -8,11 +8,12 @@ A lookup composes two or three such transforms. For 3-vectors and
 quaternions, Python float arithmetic is several times faster than numpy
 (whose per-call overhead is about a microsecond) and than constructing scipy
 ``Rotation`` objects (about ten), so composition, inversion and the per-lookup
-half of slerp are written out here. Rotation maths that is not per-lookup
-stays with scipy: :func:`slerp_step` takes the relative rotation vector of
-two samples with ``scipy.spatial.transform.Rotation``, exactly as
-``scipy.spatial.transform.Slerp`` precomputes it, and :func:`interpolate`
-then evaluates ``r0 * Rotation.from_rotvec(ratio * rotvec)``, which is what
+half of slerp are written out here. :func:`slerp_step` takes the relative
+rotation vector of two samples as ``scipy.spatial.transform.Slerp``
+precomputes it, ``Rotation.from_quat(...).as_rotvec()``, written out on
+floats with scipy's operations (:func:`rotvec_of`; scipy's object costs ten
+microseconds per stored sample), and :func:`interpolate` then evaluates
+``r0 * Rotation.from_rotvec(ratio * rotvec)``, which is what
 ``Slerp.__call__`` does. The tests check both against scipy.
 """
 
@@ -120,6 +121,43 @@ def quat_from_yaw(yaw: float) -> Quaternion:
     return (0.0, 0.0, math.sin(half), math.cos(half))
 
 
+def rotvec_of(q: Quaternion) -> tuple[float, float, float]:
+    """``Rotation.from_quat(q).as_rotvec()`` on floats, the same operations in the same order.
+
+    scipy's single-rotation path (its Cython backend) normalises ``q`` by
+    ``sqrt((x^2 + y^2 + z^2) + w^2)``, flips it onto ``w >= 0`` (at ``w == 0``
+    onto a positive first non-zero component), takes ``angle = 2 atan2(|v|,
+    w)`` and scales the vector part by ``angle / sin(angle / 2)``, or by
+    its Taylor series ``2 + a^2 / 12 + 7 a^4 / 2880`` for ``angle <= 1e-3``.
+    Written out, it costs about a microsecond instead of ten;
+    ``tests/localization/test_frames_transform.py`` compares the two exactly,
+    so a scipy that computes it differently is noticed.
+
+    Raises:
+        ValueError: a zero quaternion (as scipy).
+    """
+    x, y, z, w = q
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    if not 0.0 < norm < math.inf:
+        return _scipy_rotvec(q)  # scipy raises (zero norm) or gives its NaNs
+    x, y, z, w = x / norm, y / norm, z / norm, w / norm
+    if w < 0.0 or (w == 0.0 and (x < 0.0 or (x == 0.0 and (y < 0.0 or (y == 0.0 and z < 0.0))))):
+        x, y, z, w = -x, -y, -z, -w
+    angle = 2.0 * math.atan2(math.sqrt(x * x + y * y + z * z), w)
+    if angle <= 1e-3:
+        angle2 = angle * angle
+        scale = 2.0 + angle2 / 12.0 + 7.0 * angle2 * angle2 / 2880.0
+    else:
+        scale = angle / math.sin(angle / 2.0)
+    return scale * x, scale * y, scale * z
+
+
+def _scipy_rotvec(q: Quaternion) -> tuple[float, float, float]:
+    """``Rotation.from_quat(q).as_rotvec()`` by scipy itself."""
+    rotvec = Rotation.from_quat(q).as_rotvec()
+    return float(rotvec[0]), float(rotvec[1]), float(rotvec[2])
+
+
 def slerp_step(a: Rigid, b: Rigid) -> SlerpStep:
     """Axis and angle of the rotation from ``a``'s orientation to ``b``'s.
 
@@ -128,8 +166,7 @@ def slerp_step(a: Rigid, b: Rigid) -> SlerpStep:
     tf2's ``slerp`` also takes). Done once per stored pair of samples.
     """
     delta = quat_multiply((-a[3], -a[4], -a[5], a[6]), (b[3], b[4], b[5], b[6]))
-    rotvec = Rotation.from_quat(delta).as_rotvec()
-    rx, ry, rz = float(rotvec[0]), float(rotvec[1]), float(rotvec[2])
+    rx, ry, rz = rotvec_of(delta)
     angle = math.sqrt(rx * rx + ry * ry + rz * rz)
     if angle == 0.0:
         return NO_ROTATION

@@ -138,6 +138,43 @@ def test_interpolate_matches_scipy_slerp() -> None:
             assert same_rotation(np.array(out[3:]), slerp([ratio]).as_quat()[0])
 
 
+def _exactly(a: tuple[float, ...], b: tuple[float, ...]) -> bool:
+    """The same floats, bit for bit (sign of zero included)."""
+    return all(
+        x == y and math.copysign(1.0, x) == math.copysign(1.0, y) for x, y in zip(a, b, strict=True)
+    )
+
+
+def test_rotvec_of_is_scipy_bit_for_bit() -> None:
+    """rigid.rotvec_of gives scipy's from_quat(q).as_rotvec() exactly: general, planar (the
+    broadcaster's yaw-only steps), tiny and near-pi angles, w < 0 and w == 0."""
+    rng = np.random.default_rng(7)
+    cases: list[tuple[float, ...]] = []
+    for k in range(20_000):
+        q = rng.normal(size=4) * 10.0 ** rng.uniform(-3.0, 3.0)
+        if k % 4 == 1:
+            q[:2] = 0.0
+        elif k % 4 == 2:
+            yaw = rng.normal() * 10.0 ** rng.uniform(-8.0, 0.5)
+            q = np.array([0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)])
+        if k % 50 == 0:
+            q[3] = 0.0
+        if k % 70 == 0:
+            q[0] = q[3] = 0.0
+        if k % 3 == 0:
+            q[3] = -abs(q[3])
+        cases.append(tuple(float(v) for v in q))
+    cases += [
+        (0.0, 0.0, 0.0, 1.0),
+        (0.0, 0.0, 0.0, -1.0),
+        (0.0, 0.0, -1.0, 0.0),
+        (-0.0, 0.0, 0.0, 1.0),
+    ]
+    for q in cases:
+        expected = tuple(float(v) for v in Rotation.from_quat(q).as_rotvec())
+        assert _exactly(rigid.rotvec_of(q), expected), q  # type: ignore[arg-type]
+
+
 def test_slerp_takes_the_shorter_way() -> None:
     """Half-way from yaw 0 to yaw 170 deg, given as -q, is yaw 85 deg (not -95 deg)."""
     a = TransformStamped.from_pose2d("A", "B", 0.0, Pose2D(0.0, 0.0, 0.0)).rigid

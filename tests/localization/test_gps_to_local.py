@@ -86,3 +86,28 @@ def test_node_converts_good_fixes() -> None:
     point = node(fix(37.541, 127.0751))
     assert point == gps_to_local_cartesian(fix(37.541, 127.0751))
     assert not node.dropped
+
+
+def test_one_fix_is_the_array_projection_bit_for_bit() -> None:
+    """The node's float path for one fix gives geodesy's (numpy) projection exactly,
+    near and far from several origins, at the range limits, with the sign of zero."""
+    from localization.geodesy import gps_to_local_cartesian as project
+
+    rng = np.random.default_rng(3)
+    origins = [DEFAULT_ORIGIN, ReferenceOrigin(-33.9, 151.2), ReferenceOrigin(0.0, 0.0)]
+    for k in range(30_000):
+        origin = origins[k % 3]
+        if k % 3 == 0:
+            lat, lon = rng.uniform(-90.0, 90.0), rng.uniform(-180.0, 180.0)
+        else:
+            spread = 10.0 ** rng.integers(-5, 0)
+            lat = min(90.0, max(-90.0, origin.lat_deg + rng.normal() * spread))
+            lon = min(180.0, max(-180.0, origin.lon_deg + rng.normal() * spread))
+        cases = [(float(lat), float(lon))]
+        if k == 0:
+            cases += [(90.0, 180.0), (-90.0, -180.0), (0.0, -0.0), (-0.0, 0.0)]
+        for la, lo in cases:
+            point = gps_to_local_cartesian(fix(la, lo), origin)
+            x, y = (float(v) for v in project(la, lo, origin))
+            for got, want in ((point.x, x), (point.y, y)):
+                assert got == want and math.copysign(1.0, got) == math.copysign(1.0, want)

@@ -1,0 +1,206 @@
+"""Compiled kernels (numba) for the fusion EKF's motion step and covariance tidying.
+
+Why: :class:`~localization.ekf.model.MotionStep` runs for every IMU sample,
+every replayed one and every estimate ahead (about 4 per env step, more with
+late fixes). Its arithmetic is a few dozen floats, but in Python each of the
+~60 float results costs an interpreter round trip and a numpy item store
+(about 8 us per call on the 2-core development machine). :func:`motion_terms`
+does the same work in one compiled call: x' = f(x, u, dt), the entries of F,
+of the input Jacobian G and of Q's model terms, written into arrays the
+caller owns. The two matrix products of Q (G Sigma G') stay with numpy in the
+caller: numpy's BLAS uses fused multiply-adds, which a loop here would not
+reproduce bit for bit. :func:`symmetrised` is the ``0.5 * (P + P')`` the
+filter applies after every predict and update, in one call instead of three
+numpy operations.
+
+Same numbers: the kernel does the same IEEE operations in the same order as
+``MotionStep``'s Python did (and as ``motion_model``, ``jacob_f`` and
+``process_noise``; ``tests/localization/test_ekf_regression.py`` compares
+exactly). No ``fastmath``, so no reassociation or contraction into fused
+multiply-adds; ``math.sin``/``cos``/``exp``/``pow`` call the C library's
+functions, as Python's ``math`` does (``dt ** 3`` is written ``math.pow(dt,
+3.0)``, Python's float power, not numba's repeated multiplication).
+
+Caching as ``planner.kernels`` (``cache=True``: machine code is written next
+to this file, or under ``NUMBA_CACHE_DIR`` or the user's cache directory;
+with no writable directory the kernel compiles in each process, with a
+warning). Compiling takes a few seconds from a cold cache, loading it
+from the cache a fraction of a second.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from typing import Any, Final
+
+import numpy as np
+from numba import njit
+
+# Layout of ``motion_terms``'s ``params``.
+GPS_TAU, HEADING_TAU, QA, QW, QB, QS, GPS_VAR, HEADING_VAR = range(8)
+N_PARAMS: Final = 8
+
+
+def _probe() -> None:
+    """Nothing: the function ``_cache_usable`` asks numba to cache."""
+
+
+def _cache_usable() -> bool:
+    """Whether numba finds a cache directory for this file (see ``planner.kernels``)."""
+    try:
+        njit(cache=True)(_probe)
+    except RuntimeError:
+        warnings.warn(
+            "localization.ekf.kernels: numba has no writable cache directory "
+            "(set NUMBA_CACHE_DIR); the kernel is compiled in every process",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+        return False
+    return True
+
+
+_compiled = njit(cache=_cache_usable())
+
+
+@_compiled
+def motion_terms(x, u, dt, g, h, params, out, f, gu, qm):  # noqa: PLR0917
+    """x' into ``out``, and F, G (rows x..vy) and Q's model terms into ``f``, ``gu``, ``qm``.
+
+    Args:
+        x: state, (n, 1).
+        u: IMU input (w_m, a_x, a_y), (3,).
+        dt: interval [s], > 0.
+        g: index of gps_bias_e, or -1 without that state.
+        h: index of heading_bias, or -1 without that state.
+        params: (gps_bias_tau, heading_bias_tau, accel density^2, yaw density^2,
+            gyro walk^2, scale walk^2, gps_bias_sigma^2, heading_bias_sigma^2).
+        out: (n, 1), receives x' (yaw unwrapped); entries the model leaves alone are copied.
+        f: (n, n), identity where the model has no entry; the entries are overwritten.
+        gu: (n, 3), zero below row vy; rows x..vy are overwritten.
+        qm: (n, n), zero where no model term; the terms are overwritten.
+    """
+    n = x.shape[0]
+    px, py, yaw = x[0, 0], x[1, 0], x[2, 0]
+    vx, vy, bias = x[3, 0], x[4, 0], x[5, 0]
+    w_m, ax, ay = u[0], u[1], u[2]
+    w = w_m - bias
+    half = 0.5 * dt * dt
+    cube = math.pow(dt, 3.0)
+    c, s = math.cos(yaw), math.sin(yaw)
+    mid = yaw + 0.5 * w * dt
+    cm, sm = math.cos(mid), math.sin(mid)
+    turn = -w * dt
+    c1, s1 = math.cos(turn), math.sin(turn)
+    turn_half = -0.5 * w * dt
+    c2, s2 = math.cos(turn_half), math.sin(turn_half)
+    vex, vey = c * vx - s * vy, s * vx + c * vy
+    aex, aey = cm * ax - sm * ay, sm * ax + cm * ay
+    sv0, sv1 = c * -vy - s * vx, s * -vy + c * vx
+    sa0, sa1 = cm * -ay - sm * ax, sm * -ay + cm * ax
+    dv0 = dt * (c1 * -vy - s1 * vx) + half * (c2 * -ay - s2 * ax)
+    dv1 = dt * (s1 * -vy + c1 * vx) + half * (s2 * -ay + c2 * ax)
+    phi_g = math.exp(-dt / params[GPS_TAU]) if g >= 0 else 1.0
+    phi_h = math.exp(-dt / params[HEADING_TAU]) if h >= 0 else 1.0
+
+    # -- x' = f(x, u, dt) --
+    for i in range(n):
+        out[i, 0] = x[i, 0]
+    out[0, 0] = px + (dt * vex + half * aex)
+    out[1, 0] = py + (dt * vey + half * aey)
+    out[2, 0] = yaw + w * dt
+    out[3, 0] = (c1 * vx - s1 * vy) + dt * (c2 * ax - s2 * ay)
+    out[4, 0] = (s1 * vx + c1 * vy) + dt * (s2 * ax + c2 * ay)
+    if g >= 0:
+        out[g, 0] *= phi_g
+        out[g + 1, 0] *= phi_g
+    if h >= 0:
+        out[h, 0] *= phi_h
+
+    # -- F = df/dx (identity elsewhere) --
+    wdt = w * dt
+    cw, sw = math.cos(wdt), math.sin(wdt)
+    f[0, 2] = dt * sv0 + half * sa0
+    f[1, 2] = dt * sv1 + half * sa1
+    f[0, 3], f[0, 4], f[1, 3], f[1, 4] = dt * c, -dt * s, dt * s, dt * c
+    f[0, 5] = -0.25 * cube * sa0
+    f[1, 5] = -0.25 * cube * sa1
+    f[2, 5] = -dt
+    f[3, 3], f[3, 4], f[4, 3], f[4, 4] = cw, sw, -sw, cw
+    f[3, 5], f[4, 5] = dv0, dv1
+    if g >= 0:
+        f[g, g] = phi_g
+        f[g + 1, g + 1] = phi_g
+    if h >= 0:
+        f[h, h] = phi_h
+
+    # -- G = df/du, rows x..vy --
+    hw = 0.5 * w * dt
+    ch, sh = math.cos(hw), math.sin(hw)
+    gu[0, 0] = 0.25 * cube * sa0
+    gu[1, 0] = 0.25 * cube * sa1
+    gu[0, 1], gu[0, 2], gu[1, 1], gu[1, 2] = half * cm, -half * sm, half * sm, half * cm
+    gu[2, 0] = dt
+    gu[3, 0], gu[4, 0] = -dv0, -dv1
+    gu[3, 1], gu[3, 2], gu[4, 1], gu[4, 2] = dt * ch, dt * sh, -dt * sh, dt * ch
+
+    # -- Q's model terms --
+    qa = params[QA]
+    if qa > 0.0:
+        pp = qa * cube / 3.0
+        pv = qa * dt * dt / 2.0
+        qm[0, 0] = pp
+        qm[1, 1] = pp
+        pvc = pv * c
+        qm[0, 3] = pvc
+        qm[1, 4] = pvc
+        qm[3, 0] = pvc
+        qm[4, 1] = pvc
+        pvs = pv * s
+        qm[1, 3] = pvs
+        qm[3, 1] = pvs
+        pvm = pv * -s
+        qm[0, 4] = pvm
+        qm[4, 0] = pvm
+        qv = qa * dt
+        qm[3, 3] = qv
+        qm[4, 4] = qv
+    qm[2, 2] = params[QW] * dt
+    qm[5, 5] = params[QB] * dt
+    qm[6, 6] = params[QS] * dt
+    if g >= 0:
+        qg = params[GPS_VAR] * (1.0 - phi_g * phi_g)
+        qm[g, g] = qg
+        qm[g + 1, g + 1] = qg
+    if h >= 0:
+        qm[h, h] = params[HEADING_VAR] * (1.0 - phi_h * phi_h)
+
+
+@_compiled
+def symmetrised(p):
+    """``0.5 * (p + p.T)`` as a new array: the same two operations per element as numpy's."""
+    n = p.shape[0]
+    out = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = 0.5 * (p[i, j] + p[j, i])
+    return out
+
+
+def warm_up(step: Any, u: Any, u_cov: Any) -> None:
+    """Call each kernel once, as the filter will (read-only state and input).
+
+    numba initialises itself and loads (or compiles) the machine code on a
+    kernel's first call: about 0.3 s in a process that has used no numba
+    yet. Called when a filter is built, so that this happens there rather
+    than in its first predict (inside a timed loop, say). ``step`` is a
+    ``MotionStep`` (its arrays are overwritten by every call, so the call
+    leaves nothing behind); ``u`` and ``u_cov`` a read-only input and its
+    covariance.
+    """
+    n = step.model.layout.n
+    x = np.zeros((n, 1))
+    x.flags.writeable = False
+    step(x, u, u_cov, 0.01)
+    symmetrised(np.eye(n))
