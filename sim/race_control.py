@@ -167,8 +167,7 @@ class RaceControl:
         pose: tuple[float, float, float],
     ) -> None:
         """:meth:`update` with the CG's previous (x, y) and its (x, y, yaw) now, plain floats."""
-        # Runs every physics step: plain-float maths, the checks written out
-        # here (the helpers below do the same operations, for other callers).
+        # Runs every physics step: plain-float maths, the checks written out.
         p1x, p1y, yaw = pose
         s, lateral, index, tx, ty = self.progress.project_xy(p1x, p1y)
         self._advance_progress(s)
@@ -200,19 +199,6 @@ class RaceControl:
         self.state.progress_m += ds
         self._s_last = s
 
-    def _check_crossing(
-        self,
-        t_prev: float,
-        t: float,
-        pose_prev: Pose2D,
-        pose: Pose2D,
-        tangent: tuple[float, float],
-    ) -> None:
-        p0x, p0y, p1x, p1y = pose_prev.x, pose_prev.y, pose.x, pose.y
-        if (p1x - p0x) * tangent[0] + (p1y - p0y) * tangent[1] <= 0.0:
-            return
-        self._crossed(t_prev, t, (p0x, p0y), (p1x, p1y))
-
     def _crossed(
         self, t_prev: float, t: float, p0: tuple[float, float], p1: tuple[float, float]
     ) -> None:
@@ -235,19 +221,6 @@ class RaceControl:
             st.lap_times.append(t_cross - st.crossing_times[-1])
             st.crossing_times.append(t_cross)
             self._progress_at_crossing = st.progress_m
-
-    def _check_off_track(
-        self, t: float, pose: Pose2D, lateral: float, index: int, tangent: tuple[float, float]
-    ) -> None:
-        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
-        nx, ny = -tangent[1], tangent[0]
-        half = self._half_widths_list[min(index, len(self._half_widths_list) - 1)]
-        above = below = 0
-        for cx, cy in self._corners_list:
-            lat = lateral + (c * cx - s * cy) * nx + (s * cx + c * cy) * ny
-            above += lat > half
-            below += lat < -half
-        self._set_off_track(t, above == 4 or below == 4)
 
     def _set_off_track(self, t: float, off: bool) -> None:
         """Open or close an excursion at ``t``."""
