@@ -202,14 +202,16 @@ class Autopilot:
                 previous=self.plan,
                 sensor_frame=c.sensor_frame,
             )
+            curvature = np.zeros(0)
             if self.global_speed is not None and len(plan.path) > 1:
-                plan = self._with_global_speed(plan, classified.sensor_station)
+                plan, curvature = self._with_global_speed(plan, classified.sensor_station)
             path_reference = self.buffer.transform_points(
                 c.reference_frame, c.sensor_frame, plan.path, plan.header.stamp
             )
         except TransformError:
             self.skipped_count += 1
             return None
+        self.path_curvature = curvature  # set with the plan it belongs to
         self.classified = classified
         self.station_hint = classified.sensor_station
         self.plan = plan
@@ -219,22 +221,26 @@ class Autopilot:
         self.failed_count += plan.status is PlanStatus.FAILED
         return plan
 
-    def _with_global_speed(self, plan: LocalPlan, sensor_station: float) -> LocalPlan:
-        """The plan's speeds ending at the global path's speed where the path ends."""
+    def _with_global_speed(
+        self, plan: LocalPlan, sensor_station: float
+    ) -> tuple[LocalPlan, FloatArray]:
+        """The plan with its speeds from the global path's plan (``speed_source``
+        ``"global"``) or ending at its speed where the path ends; and the global
+        path's curvature at the waypoints (empty with ``"local"``)."""
         assert self.global_speed is not None
         s = arc_length(plan.path)
         if self.config.speed_source == "global":
             # The waypoints' stations: the sensor's, plus the path's first
             # point's distance ahead (x in ``os_sensor``), plus arc length.
             stations = sensor_station + float(plan.path[0, 0]) + s
-            self.path_curvature = self.global_speed.curvature_at(stations)
+            curvature = self.global_speed.curvature_at(stations)
             v = self.global_speed.speeds_at(stations)
             v[0] = min(v[0], max(self.speed(), 0.0))
             v = forward_pass(s, v, self.config.speed_profile.a_drive)
-            return dataclasses.replace(plan, speeds=v)
+            return dataclasses.replace(plan, speeds=v), curvature
         v_end = self.global_speed.speed_at(sensor_station + float(s[-1]))
         speeds = speed_profile(plan.path, self.config.speed_profile, self.speed(), s=s, v_end=v_end)
-        return dataclasses.replace(plan, speeds=speeds)
+        return dataclasses.replace(plan, speeds=speeds), np.zeros(0)
 
     def speed(self) -> float:
         """Speed estimate [m/s]: the last wheel speed, else from the frame tree, else 0."""

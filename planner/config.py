@@ -430,17 +430,24 @@ class AutopilotConfig(Settings):
 
     @classmethod
     def cautious(cls) -> AutopilotConfig:
-        """Lower speed limits for a pose that lags: lateral 6 m/s^2, braking
-        6 m/s^2, at most 15 m/s (the defaults: 14 + downforce, 8, 25).
+        """Lower speed limits for a pose that lags: lateral 6 m/s^2 (no
+        downforce share), braking 6 m/s^2, at most 15 m/s, and the command's
+        friction ellipse at the same 6 m/s^2 (the defaults: 14 + 0.0143 v^2,
+        8, 25).
 
         The seed's raw broadcaster publishes the last fix and the last heading:
         its pose is 50 ms (fix latency) to 150 ms (plus a 10 Hz fix period) old,
         1-3 m behind the car at 20 m/s. Driven at the defaults the car left
         trackdrive and autocross with it; at these limits every shipped
-        track, seeds 0-2, is clean (``tests/envs/test_laps.py``).
+        track, seeds 0-2, is clean (``tests/envs/test_laps.py``), at 1.6-1.7x
+        the limit lap.
         """
         return cls(
-            speed_profile=SpeedProfileConfig(a_lat_max=6.0, a_brake=6.0, v_max=15.0),
+            speed_profile=SpeedProfileConfig(
+                a_lat_max=6.0, a_lat_aero=0.0, a_brake=6.0, v_max=15.0
+            ),
+            # The command's friction ellipse uses the profile's own limits.
+            speed_control=SpeedControlConfig(lateral_grip=6.0, grip_aero=0.0),
         )
 
     def __post_init__(self) -> None:

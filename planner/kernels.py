@@ -12,8 +12,8 @@ once (``cache=True``: later processes load the machine code from the cache
 next to this file, or from ``NUMBA_CACHE_DIR`` or the user's cache directory
 when the package directory is not writable, e.g. a system install; with no
 writable cache directory at all they compile in each process, with a
-warning). Compiling all of them from a cold cache takes about 10 s on the
-2-core development machine, loading them from the cache about 0.2 s.
+warning). Compiling all of them from a cold cache takes about 12 s on the
+2-core development machine, loading them from the cache about 0.25 s.
 
 Every kernel does the same IEEE operations per element, in the same order,
 as the numpy code it replaces (no ``fastmath``, so no reassociation or
@@ -55,7 +55,7 @@ def _cache_usable() -> bool:
     It tries ``__pycache__`` beside this file, then ``NUMBA_CACHE_DIR`` or
     the user's cache directory; with none writable, ``njit(cache=True)``
     raises at decoration. The kernels are then compiled in every process
-    (about 10 s on the first planning step) instead of failing to import.
+    (about 12 s when the first ``Autopilot`` is built) instead of failing to import.
     """
     try:
         njit(cache=True)(_probe)

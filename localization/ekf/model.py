@@ -442,6 +442,9 @@ class MotionStep:
             (x' (n, 1), new and unwrapped as from :func:`motion_model`; F (n, n),
             an array this object overwrites on its next call; Q (n, n), new).
         """
+        n = self._f.shape[0]
+        if x.shape != (n, 1) or u.shape != (3,):  # the kernel does not check bounds
+            raise ValueError(f"MotionStep: x {x.shape}, u {u.shape}; expected ({n}, 1) and (3,)")
         out = np.empty_like(x)
         f, gu, qm = self._f, self._g, self._qm
         kernels.motion_terms(x, u, dt, self._g_index, self._h_index, self._params, out, f, gu, qm)

@@ -105,4 +105,5 @@ class BiasRandomWalk:
             self.value = self.value + self.density * math.sqrt(dt) * w
         # else b + 0 * w is b bit for bit (b starts at +0 and w is finite); the
         # draw is still made, so the stream advances as with any density.
-        return self.value
+        # A caller gets its own array either way, never the walk's state.
+        return self.value.copy()

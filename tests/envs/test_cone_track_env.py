@@ -205,7 +205,8 @@ def test_localization_error_in_every_mode() -> None:
 
 def test_autopilot_policy_drives_raw_localization_cautiously() -> None:
     """Default settings with fused localization; the cautious preset (6 m/s^2
-    lateral, 15 m/s) in an episode with raw localization, also when a reset
+    lateral with no downforce share, in the plan and the command's ellipse,
+    6 m/s^2 braking, 15 m/s) in an episode with raw localization, also when a reset
     option picks it; settings given to the policy are kept."""
     env = ConeTrackEnv(track="autocross")
     env.reset(seed=0)
@@ -214,8 +215,12 @@ def test_autopilot_policy_drives_raw_localization_cautiously() -> None:
     env.reset(seed=0, options={"localization": "raw"})
     policy.reset()
     assert policy.autopilot.config == AutopilotConfig.cautious()
-    assert policy.autopilot.config.speed_profile.a_lat_max == 6.0
-    assert policy.autopilot.config.speed_profile.v_max == 15.0
+    profile = policy.autopilot.config.speed_profile
+    control = policy.autopilot.config.speed_control
+    assert (profile.a_lat_max, profile.a_lat_aero, profile.a_brake, profile.v_max) == (
+        6.0, 0.0, 6.0, 15.0,
+    )  # fmt: skip
+    assert (control.lateral_grip, control.grip_aero) == (6.0, 0.0)
     given = AutopilotConfig.from_dict({"control_rate": 40.0})
     kept = AutopilotPolicy(env, given)
     assert kept.autopilot.config == given

@@ -35,12 +35,13 @@ def test_autopilot_completes_laps_cleanly(track: str, seed: int) -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("track", ["trackdrive", "autocross", "skidpad"])
-def test_raw_localization_laps_at_the_cautious_limits(track: str) -> None:
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("track", shipped_tracks())
+def test_raw_localization_laps_at_the_cautious_limits(track: str, seed: int) -> None:
     """The seed's raw broadcaster (last fix, last heading: a pose up to 150 ms
-    old) drives at ``AutopilotConfig.cautious()``: two clean laps. At the
+    old) drives at ``AutopilotConfig.cautious()``: every lap clean. At the
     default limits the car left trackdrive and autocross with it."""
-    result = run_scenario(track, laps=2, seed=0, sensors="rtk", localization="raw")
+    result = run_scenario(track, laps=2, seed=seed, sensors="rtk", localization="raw")
     assert result.finished, result.end_reason
-    assert result.laps_completed == 2
+    assert result.laps_completed == result.laps
     assert result.cones_down_or_out == 0 and result.off_track_events == 0

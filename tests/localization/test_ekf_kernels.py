@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from localization.ekf import model as m
 from localization.ekf.model import ProcessModel, StateLayout
@@ -11,7 +12,10 @@ from localization.ekf.model import ProcessModel, StateLayout
 def test_motion_step_matches_the_model_for_any_interval() -> None:
     """Random dt (the kernel's cube and exponentials against Python's), every layout."""
     rng = np.random.default_rng(12)
-    for layout in (StateLayout(), StateLayout(gps_bias=True, heading_bias=True)):
+    layouts = [
+        StateLayout(gps_bias=g, heading_bias=h) for g in (False, True) for h in (False, True)
+    ]
+    for layout in layouts:
         model = ProcessModel(layout, 0.01, 0.03, 0.002, 1e-4, 1e-4, 2.0, 60.0, 0.03, 30.0)
         step = m.MotionStep(model)
         for _ in range(500):
@@ -25,3 +29,14 @@ def test_motion_step_matches_the_model_for_any_interval() -> None:
             np.testing.assert_array_equal(f, m.jacob_f(x, u, dt, model))
             np.testing.assert_array_equal(q, m.process_noise(x, u, cov, dt, model))
             assert x1.flags.writeable  # the filter wraps its yaw in place
+
+
+def test_motion_step_rejects_a_wrongly_shaped_state_or_input() -> None:
+    """The kernel does not check bounds: the wrapper raises, naming the shapes."""
+    model = ProcessModel(StateLayout(), 0.01, 0.03, 0.002, 1e-4, 1e-4, 2.0, 60.0, 0.03, 30.0)
+    step = m.MotionStep(model)
+    cov = np.eye(3) * 1e-4
+    with pytest.raises(ValueError, match=r"x \(4, 1\), u \(3,\); expected \(7, 1\)"):
+        step(np.zeros((4, 1)), np.zeros(3), cov, 0.01)
+    with pytest.raises(ValueError, match=r"u \(2,\)"):
+        step(np.zeros((7, 1)), np.zeros(2), cov, 0.01)

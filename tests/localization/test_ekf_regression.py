@@ -62,7 +62,7 @@ RTOL = 1e-9
 # Recorded with the plain implementation (commit 2ca5e04, before the filter was
 # written for speed; re-recorded with it when the world's truth speed and acceleration became
 # the positions' own, half a step earlier): ``record()`` fed in delivery order to
-# ``FusionEkf(for_profile("rtk"))`` by ``run()``; ``estimate(world.time)`` at
+# ``FusionEkf(regression_config())`` by ``run()``; ``estimate(world.time)`` at
 # the checkpoints, ``estimate()`` at the end; every float printed with repr().
 # If ``sim`` changes what it sends, the first test fails: re-record them so.
 EXPECTED_STREAM = {"Imu": 401, "WheelSpeed": 201, "NavSatFix": 40, "HeadingStamped": 80}

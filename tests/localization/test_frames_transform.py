@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import scipy
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
@@ -170,9 +171,16 @@ def test_rotvec_of_is_scipy_bit_for_bit() -> None:
         (0.0, 0.0, -1.0, 0.0),
         (-0.0, 0.0, 0.0, 1.0),
     ]
+    # rotvec_of writes out scipy 1.17's as_rotvec step by step; another scipy
+    # may round differently, so there the check is to a few ulp.
+    same_scipy = scipy.__version__.startswith("1.17.")
     for q in cases:
         expected = tuple(float(v) for v in Rotation.from_quat(q).as_rotvec())
-        assert _exactly(rigid.rotvec_of(q), expected), q  # type: ignore[arg-type]
+        got = rigid.rotvec_of(q)  # type: ignore[arg-type]
+        if same_scipy:
+            assert _exactly(got, expected), q
+        else:
+            np.testing.assert_allclose(got, expected, rtol=4 * np.finfo(float).eps, atol=1e-300)
 
 
 def test_slerp_takes_the_shorter_way() -> None:

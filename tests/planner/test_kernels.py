@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -48,6 +49,8 @@ from planner.speed_profile import (
     window_mean,
 )
 from planner.spline import spline_through
+
+REPO = Path(__file__).resolve().parents[2]  # the child processes import from here
 
 # ---------------------------------------------------------------- references
 
@@ -613,7 +616,12 @@ assert kernels.arc_length(np.array([[0.0, 0.0], [3.0, 4.0]])).tolist() == [0.0, 
 print("ok")
 """
     done = subprocess.run(
-        [sys.executable, "-c", script], capture_output=True, text=True, check=False, timeout=300
+        [sys.executable, "-c", script],
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=300,
+        cwd=REPO,
     )
     assert done.returncode == 0, done.stdout + done.stderr
     assert done.stdout.strip() == "ok"
@@ -673,7 +681,12 @@ assert {"profile_limits", "profile_passes", "spline_path", "nearest_segments"} <
 print("ok")
 """
     done = subprocess.run(
-        [sys.executable, "-c", script], capture_output=True, text=True, check=False, timeout=600
+        [sys.executable, "-c", script],
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=600,
+        cwd=REPO,
     )
     assert done.returncode == 0, done.stdout + done.stderr
     assert done.stdout.strip() == "ok"
