@@ -36,7 +36,6 @@ waypoints with speeds, status), ``path_now`` and ``lookahead_point`` (current
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import math
 from collections.abc import Iterable
@@ -193,6 +192,7 @@ class Autopilot:
                     station_hint=self.station_hint, reference_frame=c.reference_frame,
                 )  # fmt: skip
                 self.tf_latest_count += 1
+            station = classified.sensor_station
             plan = reference_path_planning(
                 classified,
                 self.buffer,
@@ -201,10 +201,13 @@ class Autopilot:
                 v_start=self.speed(),
                 previous=self.plan,
                 sensor_frame=c.sensor_frame,
+                speeds=(
+                    None
+                    if self.global_speed is None
+                    else functools.partial(self._global_speeds, sensor_station=station)
+                ),
             )
-            curvature = np.zeros(0)
-            if self.global_speed is not None and len(plan.path) > 1:
-                plan, curvature = self._with_global_speed(plan, classified.sensor_station)
+            curvature = self._global_curvature(plan.path, station)
             path_reference = self.buffer.transform_points(
                 c.reference_frame, c.sensor_frame, plan.path, plan.header.stamp
             )
@@ -221,26 +224,37 @@ class Autopilot:
         self.failed_count += plan.status is PlanStatus.FAILED
         return plan
 
-    def _with_global_speed(
-        self, plan: LocalPlan, sensor_station: float
-    ) -> tuple[LocalPlan, FloatArray]:
-        """The plan with its speeds from the global path's plan (``speed_source``
-        ``"global"``) or ending at its speed where the path ends; and the global
-        path's curvature at the waypoints (empty with ``"local"``)."""
+    def _global_speeds(
+        self, path: FloatArray, s: FloatArray | None, *, sensor_station: float
+    ) -> FloatArray:
+        """The waypoints' speeds from the global path's plan (``speed_source``
+        ``"global"``) or the local profile ending at its speed where the path
+        ends (``"local"``); a path of one point or none gets the local profile."""
         assert self.global_speed is not None
-        s = arc_length(plan.path)
+        profile = self.config.speed_profile
+        if len(path) <= 1:
+            return speed_profile(path, profile, self.speed(), s=s)
+        s = arc_length(path) if s is None else s
         if self.config.speed_source == "global":
-            # The waypoints' stations: the sensor's, plus the path's first
-            # point's distance ahead (x in ``os_sensor``), plus arc length.
-            stations = sensor_station + float(plan.path[0, 0]) + s
-            curvature = self.global_speed.curvature_at(stations)
-            v = self.global_speed.speeds_at(stations)
+            v = self.global_speed.speeds_at(self._stations(path, s, sensor_station))
             v[0] = min(v[0], max(self.speed(), 0.0))
-            v = forward_pass(s, v, self.config.speed_profile.a_drive)
-            return dataclasses.replace(plan, speeds=v), curvature
+            return forward_pass(s, v, profile.a_drive)
         v_end = self.global_speed.speed_at(sensor_station + float(s[-1]))
-        speeds = speed_profile(plan.path, self.config.speed_profile, self.speed(), s=s, v_end=v_end)
-        return dataclasses.replace(plan, speeds=speeds), np.zeros(0)
+        return speed_profile(path, profile, self.speed(), s=s, v_end=v_end)
+
+    def _global_curvature(self, path: FloatArray, sensor_station: float) -> FloatArray:
+        """The global path's curvature at the waypoints (``speed_source`` ``"global"``;
+        empty otherwise), for the lookahead cap."""
+        if self.global_speed is None or self.config.speed_source != "global" or len(path) <= 1:
+            return np.zeros(0)
+        stations = self._stations(path, arc_length(path), sensor_station)
+        return self.global_speed.curvature_at(stations)
+
+    @staticmethod
+    def _stations(path: FloatArray, s: FloatArray, sensor_station: float) -> FloatArray:
+        """The waypoints' global-path stations: the sensor's, plus the path's first
+        point's distance ahead (x in ``os_sensor``), plus arc length."""
+        return sensor_station + float(path[0, 0]) + s
 
     def speed(self) -> float:
         """Speed estimate [m/s]: the last wheel speed, else from the frame tree, else 0."""

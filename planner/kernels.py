@@ -39,38 +39,19 @@ C-contiguous, so each kernel compiles to one specialisation.
 from __future__ import annotations
 
 import math
-import warnings
 
 import numpy as np
-from numba import njit
+
+from localization.compiled import cached_njit
 
 
 def _probe() -> None:
-    """Nothing: the function ``_cache_usable`` asks numba to cache."""
+    """Nothing: what ``cached_njit`` asks numba to cache, from this file's directory."""
 
 
-def _cache_usable() -> bool:
-    """Whether numba finds a cache directory for this file.
-
-    It tries ``__pycache__`` beside this file, then ``NUMBA_CACHE_DIR`` or
-    the user's cache directory; with none writable, ``njit(cache=True)``
-    raises at decoration. The kernels are then compiled in every process
-    (about 12 s when the first ``Autopilot`` is built) instead of failing to import.
-    """
-    try:
-        njit(cache=True)(_probe)
-    except RuntimeError:
-        warnings.warn(
-            "planner.kernels: numba has no writable cache directory (set NUMBA_CACHE_DIR); "
-            "the kernels are compiled in every process",
-            RuntimeWarning,
-            stacklevel=2,
-        )
-        return False
-    return True
-
-
-_compiled = njit(cache=_cache_usable())
+# Cached beside this file (or under NUMBA_CACHE_DIR); with no writable cache
+# directory, compiled in every process (a cold compile: see the module docstring).
+_compiled = cached_njit(_probe, "planner.kernels")
 
 # Columns of ``PathProjector``'s segment table (``geometry``).
 _SX, _SY, _DX, _DY, _INV_LEN2, _MID_STATION, _HALF_LENGTH, _LENGTH, _STATION0 = range(9)

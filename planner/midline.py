@@ -34,6 +34,7 @@ the speed profile), with the numbers of the numpy code they replaced
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import StrEnum
 
@@ -61,6 +62,9 @@ from planner.messages import BridgeLines, LocalPath, Midpoints, Waypoints
 from planner.ordering import ordered_midpoints
 from planner.speed_profile import speed_profile
 from planner.spline import fit_path
+
+SpeedFn = Callable[[FloatArray, "FloatArray | None"], FloatArray]
+"""``speeds(path, s)``: the waypoints' speeds for a path and its arc length (or None)."""
 
 _DEFAULT_CONFIG = MidlineConfig()  # frozen: built once
 
@@ -290,6 +294,7 @@ def reference_path_planning(
     previous: LocalPlan | None = None,
     time: float = LATEST,
     sensor_frame: str = FRAME_OS_SENSOR,
+    speeds: SpeedFn | None = None,
 ) -> LocalPlan:
     """Plan the local path between the classified cones, in ``sensor_frame``.
 
@@ -302,6 +307,11 @@ def reference_path_planning(
         previous: the last plan, carried forward when this one is not sound.
         time: lookup time [s]; :data:`LATEST` as in the seed.
         sensor_frame: the frame the path is planned in.
+        speeds: how the waypoints get their speeds, ``speeds(path, s)`` with
+            ``s`` the path's arc length (None for a path carried forward);
+            by default the speed profile of ``speed_config`` from ``v_start``.
+            The autopilot passes its global-path speeds here, so that no
+            profile is computed only to be replaced.
 
     Returns:
         The plan with every intermediate.
@@ -333,7 +343,11 @@ def reference_path_planning(
         bridges=bridges,
         midpoints=midpoints,
         path=path,
-        speeds=speed_profile(path, speed_config, v_start, s=path_s),
+        speeds=(
+            speed_profile(path, speed_config, v_start, s=path_s)
+            if speeds is None
+            else speeds(path, path_s)
+        ),
         status=status,
         reason=reason,
         track=track,

@@ -31,11 +31,11 @@ from the cache a fraction of a second.
 from __future__ import annotations
 
 import math
-import warnings
 from typing import Any, Final
 
 import numpy as np
-from numba import njit
+
+from localization.compiled import cached_njit
 
 # Layout of ``motion_terms``'s ``params``.
 GPS_TAU, HEADING_TAU, QA, QW, QB, QS, GPS_VAR, HEADING_VAR = range(8)
@@ -43,25 +43,12 @@ N_PARAMS: Final = 8
 
 
 def _probe() -> None:
-    """Nothing: the function ``_cache_usable`` asks numba to cache."""
+    """Nothing: what ``cached_njit`` asks numba to cache, from this file's directory."""
 
 
-def _cache_usable() -> bool:
-    """Whether numba finds a cache directory for this file (see ``planner.kernels``)."""
-    try:
-        njit(cache=True)(_probe)
-    except RuntimeError:
-        warnings.warn(
-            "localization.ekf.kernels: numba has no writable cache directory "
-            "(set NUMBA_CACHE_DIR); the kernel is compiled in every process",
-            RuntimeWarning,
-            stacklevel=2,
-        )
-        return False
-    return True
-
-
-_compiled = njit(cache=_cache_usable())
+# Cached beside this file (or under NUMBA_CACHE_DIR); with no writable cache
+# directory, compiled in every process (a cold compile: see the module docstring).
+_compiled = cached_njit(_probe, "localization.ekf.kernels")
 
 
 @_compiled

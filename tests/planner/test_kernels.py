@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import itertools
 import math
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +53,21 @@ from planner.speed_profile import (
 from planner.spline import spline_through
 
 REPO = Path(__file__).resolve().parents[2]  # the child processes import from here
+
+
+def run_child(script: str) -> None:
+    """Run ``script`` in a fresh Python process from the repository; it must print "ok"."""
+    done = subprocess.run(
+        [sys.executable, "-c", script],
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=600,
+        cwd=REPO,
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert done.stdout.strip() == "ok"
+
 
 # ---------------------------------------------------------------- references
 
@@ -595,9 +612,8 @@ def test_kernels_are_deterministic() -> None:
 
 
 def test_import_without_a_writable_cache_directory() -> None:
-    """No cache directory numba can write: the kernels compile uncached, with a warning."""
-    import subprocess
-    import sys
+    """No cache directory numba can write: the planner's and the EKF's kernels compile
+    uncached, each module with its warning."""
 
     script = """
 import warnings
@@ -610,29 +626,22 @@ caching._CacheLocator.ensure_cache_path = unwritable  # every locator fails
 with warnings.catch_warnings(record=True) as caught:
     warnings.simplefilter("always")
     from planner import kernels
+    from localization.ekf import kernels as ekf_kernels
 import numpy as np
-assert any("no writable cache" in str(w.message) for w in caught), caught
+owners = {str(w.message).split(":")[0] for w in caught if "no writable cache" in str(w.message)}
+assert owners == {"planner.kernels", "localization.ekf.kernels"}, caught
 assert kernels.arc_length(np.array([[0.0, 0.0], [3.0, 4.0]])).tolist() == [0.0, 5.0]
+p = np.array([[1.0, 2.0], [4.0, 3.0]])
+assert ekf_kernels.symmetrised(p).tolist() == [[1.0, 3.0], [3.0, 3.0]]
 print("ok")
 """
-    done = subprocess.run(
-        [sys.executable, "-c", script],
-        capture_output=True,
-        text=True,
-        check=False,
-        timeout=300,
-        cwd=REPO,
-    )
-    assert done.returncode == 0, done.stdout + done.stderr
-    assert done.stdout.strip() == "ok"
+    run_child(script)
 
 
 def test_building_an_autopilot_loads_every_kernel_the_planning_step_calls() -> None:
     """After ``warm_up_planner`` (in ``Autopilot()``), planning along a winding
     track with the local and the global speed source calls no kernel, and no
     argument types, that the warm-up did not already load (a fresh process)."""
-    import subprocess
-    import sys
 
     script = """
 import dataclasses, math
@@ -660,8 +669,9 @@ path = global_path_from_centreline(centre, closed=False)
 assert not loaded()
 pilots = [Autopilot(Buffer(), path)]
 after_warm_up = loaded()
+assert AutopilotConfig().speed_source == "global"
 pilots.append(Autopilot(Buffer(), path, dataclasses.replace(
-    AutopilotConfig(), speed_source="global")))
+    AutopilotConfig(), speed_source="local")))
 ok = 0
 for pilot in pilots:
     for k, i in enumerate(range(10, 300, 15)):
@@ -680,13 +690,4 @@ assert loaded() == after_warm_up, (after_warm_up, loaded())
 assert {"profile_limits", "profile_passes", "spline_path", "nearest_segments"} <= set(loaded())
 print("ok")
 """
-    done = subprocess.run(
-        [sys.executable, "-c", script],
-        capture_output=True,
-        text=True,
-        check=False,
-        timeout=600,
-        cwd=REPO,
-    )
-    assert done.returncode == 0, done.stdout + done.stderr
-    assert done.stdout.strip() == "ok"
+    run_child(script)

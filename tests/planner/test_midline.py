@@ -71,6 +71,26 @@ def test_straight_midline_is_the_centreline(synth: ModuleType, straight) -> None
     assert plan.header.frame_id == "os_sensor" and plan.header.stamp == scene.stamp
 
 
+def test_speeds_hook_replaces_the_profile(synth: ModuleType, straight) -> None:
+    """``speeds(path, s)`` gets the path and its arc length (0, 0.5, ..., 10 m on the
+    straight) and its result becomes the waypoints' speeds; without it, the profile."""
+    scene = synth.make_scene(straight, Pose2D(0.0, 0.0, 0.0))
+    seen: list[tuple[np.ndarray, np.ndarray | None]] = []
+
+    def speeds(path: np.ndarray, s: np.ndarray | None) -> np.ndarray:
+        seen.append((path, s))
+        return np.full(len(path), 7.0)
+
+    plan, _, _ = plan_scene(scene, speeds=speeds)
+    ((path, s),) = seen
+    assert path is plan.path and s is not None
+    assert_allclose(s, 0.5 * np.arange(len(path)), atol=1e-9)
+    assert_allclose(s[-1], 10.0, atol=1e-9)
+    assert_allclose(plan.speeds, 7.0)
+    default, _, _ = plan_scene(scene, v_start=0.0)
+    assert default.speeds[0] == 0.0 and default.speeds.max() > 0.0
+
+
 @pytest.mark.parametrize("clockwise", [False, True])
 @pytest.mark.parametrize(("lateral", "dyaw"), [(0.0, 0.0), (0.6, -0.15), (-0.4, 0.2)])
 def test_circle_midline_within_2_cm(
