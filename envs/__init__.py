@@ -14,8 +14,10 @@ import gymnasium as gym
 
 ENV_ID = "conesim/ConeTrack-v0"
 # A backstop only: the env ends its episodes itself at its ``time_limit`` (with
-# ``info["end_reason"] == "time_limit"``); 100,000 steps is 2,000 s at 50 Hz.
-DEFAULT_MAX_EPISODE_STEPS = 100_000
+# ``info["end_reason"] == "time_limit"``). 10 million steps is 2.3 simulated
+# days at 50 Hz: far behind the time limit of any lap count a user would set
+# (60 s per lap + 30 s), so the env's own end, with its reason, comes first.
+DEFAULT_MAX_EPISODE_STEPS = 10_000_000
 
 if ENV_ID not in gym.registry:
     gym.register(

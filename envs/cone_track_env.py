@@ -122,8 +122,7 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         sensors = options.get("sensors", cfg.sensors)
         localization = options.get("localization", cfg.localization)
         EnvConfig(track=track, sensors=sensors, localization=localization)  # validates
-        start = options.get("start_pose")
-        start_pose = None if start is None else Pose2D(*(float(v) for v in start))
+        start_pose = _start_pose_option(options.get("start_pose"))
         episode_seed = int(self.np_random.integers(0, 2**31 - 1))
         # Build first: a bad option leaves the env as it was.
         self.stack = self._build_stack(episode_seed, track, sensors, localization, start_pose)
@@ -215,12 +214,15 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         )
 
     def _observe(self) -> ObsType:
+        estimate = self.stack.estimate()
+        dict_pose = self.config.observation == "dict" and estimate is None
         return build_observation(
             self._memory,
-            self.stack.estimate(),
+            estimate,
             self._action,
             self.config.max_cones,
             self.config.observation,
+            published=self.stack.published_pose() if dict_pose else None,
         )
 
     def _score_counts(self) -> dict[str, float]:
@@ -342,3 +344,20 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
                         "reference", "os_sensor", np.asarray(look).reshape(1, 2), LATEST
                     )[0]
         return scene
+
+
+def _start_pose_option(value: Any) -> Pose2D | None:
+    """The ``start_pose`` reset option, (x [m], y [m], yaw [rad]) of the CG, or None."""
+    if value is None:
+        return None
+    try:
+        if isinstance(value, str | bytes):
+            raise TypeError
+        x, y, yaw = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"reset option start_pose must be (x [m], y [m], yaw [rad]) numbers, got {value!r}"
+        ) from None
+    if not all(math.isfinite(v) for v in (x, y, yaw)):
+        raise ValueError(f"reset option start_pose must be finite, got {value!r}")
+    return Pose2D(x, y, yaw)

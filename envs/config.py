@@ -6,9 +6,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
+
+import numpy as np
 
 from envs.stack import LOCALIZATION_MODES
 from sim.sensors import PROFILES as SENSOR_PROFILES
@@ -21,9 +24,9 @@ OBSERVATION_MODES = ("vector", "dict")
 class RewardWeights:
     """Weights of the named reward terms (each term is also in ``info``).
 
-    The penalties follow the Formula Student scoring: 2 s per cone down or
-    out, 10 s per off-course (REFERENCES.md), converted to metres of progress
-    at ``reference_speed``.
+    The default penalties follow the Formula Student scoring: 2 s per cone
+    down or out, 10 s per off-course (REFERENCES.md), as metres of progress
+    at 10 m/s (-20 and -100).
 
     Attributes:
         progress: per metre of net progress along the true centreline [1/m].
@@ -32,7 +35,6 @@ class RewardWeights:
         cone_doo: per cone down or out.
         off_track: per excursion off the track.
         lap: per completed lap.
-        reference_speed: speed that turns a time penalty into metres [m/s].
     """
 
     progress: float = 1.0  # [1/m]
@@ -41,12 +43,11 @@ class RewardWeights:
     cone_doo: float = -20.0  # FS: 2 s per DOO x 10 m/s
     off_track: float = -100.0  # FS: 10 s per off-course x 10 m/s
     lap: float = 0.0
-    reference_speed: float = 10.0  # [m/s]
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
-            if not math.isfinite(value):
+            if not _is_real(value) or not math.isfinite(value):
                 raise ValueError(f"RewardWeights.{f.name} must be finite, got {value!r}")
 
 
@@ -86,13 +87,23 @@ class EnvConfig:
         _choice("sensors", self.sensors, tuple(SENSOR_PROFILES))
         _choice("localization", self.localization, LOCALIZATION_MODES)
         _choice("observation", self.observation, OBSERVATION_MODES)
-        if not (isinstance(self.laps, int) and self.laps >= 1):
+        if not (isinstance(self.track, str) and self.track):
+            raise ValueError(f"EnvConfig.track must be a track name or file, got {self.track!r}")
+        if not (_is_int(self.laps) and self.laps >= 1):
             raise ValueError(f"EnvConfig.laps must be an integer >= 1, got {self.laps!r}")
-        if not (isinstance(self.max_cones, int) and 1 <= self.max_cones <= 512):
+        if not (_is_int(self.max_cones) and 1 <= self.max_cones <= 512):
             raise ValueError(f"EnvConfig.max_cones must be in [1, 512], got {self.max_cones!r}")
+        for name in ("terminate_off_track", "terminate_stuck"):
+            flag = getattr(self, name)
+            if not isinstance(flag, bool | np.bool_):
+                raise ValueError(f"EnvConfig.{name} must be True or False, got {flag!r}")
+        if not isinstance(self.rewards, RewardWeights):
+            raise ValueError(
+                f"EnvConfig.rewards must be a mapping of reward weights, got {self.rewards!r}"
+            )
         for name in ("control_rate", "physics_rate"):
             value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
+            if not (_is_real(value) and math.isfinite(value) and value > 0):
                 raise ValueError(f"EnvConfig.{name} must be > 0 [Hz], got {value!r}")
         ratio = self.physics_rate / self.control_rate
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
@@ -101,7 +112,7 @@ class EnvConfig:
                 f"of control_rate ({self.control_rate} Hz)"
             )
         if self.time_limit is not None and not (
-            math.isfinite(self.time_limit) and self.time_limit > 0
+            _is_real(self.time_limit) and math.isfinite(self.time_limit) and self.time_limit > 0
         ):
             raise ValueError(f"EnvConfig.time_limit must be > 0 [s], got {self.time_limit!r}")
 
@@ -133,6 +144,16 @@ class EnvConfig:
         return cls(**kwargs)
 
 
+def _is_int(value: Any) -> bool:
+    """An integer (Python's or numpy's), not a bool."""
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool | np.bool_)
+
+
+def _is_real(value: Any) -> bool:
+    """A real number (Python's or numpy's), not a bool."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
+
+
 def _choice(name: str, value: str, allowed: tuple[str, ...]) -> None:
-    if value not in allowed:
+    if not isinstance(value, str) or value not in allowed:
         raise ValueError(f"EnvConfig.{name}: unknown value {value!r}; allowed: {list(allowed)}")

@@ -8,14 +8,20 @@ Vector mode (float32, shape ``(6 + 3 K,)``)::
 * ``speed`` [m/s] and ``yaw_rate`` [rad/s]: the EKF estimate in ``fused`` mode,
   otherwise the last wheel-speed and gyro messages (what the car measures);
 * ``steer_cmd``, ``accel_cmd``: the previous action, in [-1, 1];
-* ``pos_std`` [m], ``yaw_std`` [rad]: the EKF's 1-sigma uncertainty (0 when
-  no filter runs);
+* ``pos_std`` [m], ``yaw_std`` [rad]: the EKF's 1-sigma uncertainty, the
+  position's radial sqrt(sigma_x^2 + sigma_y^2) and the heading's (0 when no
+  filter runs: ``truth`` is exact, ``raw`` states none);
 * ``x_i, y_i`` [m]: the latest cone detection in ``os_sensor``, nearest first
   (the seed's ``/sorted_cones_time``), ``m_i`` = 1 for a real entry and 0 for
   padding (padded entries are zero).
 
-Dict mode adds the colours (one-hot over ``CONE_COLOURS``), the estimated pose
-in ``reference`` and its 3x3 covariance. Every value is clipped into the
+Dict mode adds the colours (one-hot over ``CONE_COLOURS``), the pose of
+``gps_antenna`` in ``reference`` with its 3x3 covariance, and ``pose_valid``:
+in ``fused`` mode the EKF's estimate now and its covariance; in ``raw`` and
+``truth`` mode the pose the frame tree holds (the broadcaster's last
+``reference -> gps_antenna``) with a zero covariance. ``pose_valid`` is 1 when
+there is a pose, 0 before the first one (the filter not yet initialised, no
+broadcast yet), when ``pose`` and ``pose_covariance`` are zeros. Every value is clipped into the
 space's bounds so ``observation_space.contains(obs)`` always holds.
 """
 
@@ -31,6 +37,7 @@ from numpy.typing import NDArray
 
 from localization.ekf import Estimate
 from localization.messages import CONE_COLOURS, ConeDetections, Imu, Message, WheelSpeed
+from localization.pose import Pose2D
 
 EGO_SIZE = 6
 EGO_LOW = np.array([-5.0, -10.0, -1.0, -1.0, 0.0, 0.0], dtype=np.float32)
@@ -61,6 +68,7 @@ def observation_space(max_cones: int, mode: str) -> spaces.Space[Any]:
                 dtype=np.float32,
             ),
             "pose_covariance": spaces.Box(-1e6, 1e6, (3, 3), dtype=np.float32),
+            "pose_valid": spaces.Box(0.0, 1.0, (1,), dtype=np.float32),
         }
     )
 
@@ -94,8 +102,14 @@ def build_observation(
     action: NDArray[np.float32],
     max_cones: int,
     mode: str,
+    *,
+    published: Pose2D | None = None,
 ) -> NDArray[np.float32] | dict[str, NDArray[np.float32]]:
-    """The observation for the current step (see the module docstring)."""
+    """The observation for the current step (see the module docstring).
+
+    ``published`` is the frame tree's pose, used in dict mode when there is
+    no ``estimate`` (``raw`` and ``truth`` localization).
+    """
     if estimate is not None:
         speed, yaw_rate = estimate.speed, estimate.yaw_rate
         cov = estimate.pose_covariance
@@ -117,12 +131,14 @@ def build_observation(
         out[EGO_SIZE:] = flat
         return out
     cones, mask, colours = cones.copy(), mask.copy(), colours.copy()
+    pose_cov = np.zeros((3, 3), dtype=np.float32)
     if estimate is not None:
-        pose = np.array([estimate.pose.x, estimate.pose.y, estimate.pose.yaw], dtype=np.float32)
+        at: Pose2D | None = estimate.pose
         pose_cov = np.asarray(estimate.pose_covariance, dtype=np.float32)
     else:
-        pose = np.zeros(3, dtype=np.float32)
-        pose_cov = np.zeros((3, 3), dtype=np.float32)
+        at = published
+    xyz = (0.0, 0.0, 0.0) if at is None else (at.x, at.y, at.yaw)
+    pose = np.array(xyz, dtype=np.float32)
     return {
         "ego": ego,
         "cones": cones,
@@ -132,6 +148,7 @@ def build_observation(
             pose, [-POSE_BOUND, -POSE_BOUND, -math.pi], [POSE_BOUND, POSE_BOUND, math.pi]
         ).astype(np.float32),
         "pose_covariance": np.clip(pose_cov, -1e6, 1e6).astype(np.float32),
+        "pose_valid": np.array([0.0 if at is None else 1.0], dtype=np.float32),
     }
 
 

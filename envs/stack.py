@@ -26,10 +26,16 @@ from dataclasses import dataclass
 from localization.broadcaster import BroadcasterConfig, BroadcastMode, VehicleTfBroadcaster
 from localization.ekf import PROFILES as EKF_PROFILES
 from localization.ekf import Estimate, FusionEkf, for_profile
-from localization.frames import Buffer
+from localization.frames import LATEST, Buffer, TransformError
 from localization.global_path import GlobalPath, global_path_for_track
 from localization.gps_to_local import GpsToLocalCartesian
-from localization.messages import HeadingStamped, Message, NavSatFix
+from localization.messages import (
+    FRAME_GPS_ANTENNA,
+    FRAME_REFERENCE,
+    HeadingStamped,
+    Message,
+    NavSatFix,
+)
 from localization.pose import Pose2D
 from sim.world import World, WorldConfig
 from tracks import Track
@@ -148,6 +154,14 @@ class VehicleStack:
                 self.broadcaster.on_global_yaw(msg)
             if self.localization == "fused":
                 self.ekf.process(msg)
+
+    def published_pose(self) -> Pose2D | None:
+        """``reference -> gps_antenna`` as the frame tree holds it now (the last
+        broadcast, all three modes), or None before the first one."""
+        try:
+            return self.buffer.lookup_pose2d(FRAME_REFERENCE, FRAME_GPS_ANTENNA, LATEST)
+        except TransformError:
+            return None
 
     def estimate(self) -> Estimate | None:
         """The filter's estimate now (fused mode, once initialised), else None."""

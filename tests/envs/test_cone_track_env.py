@@ -224,3 +224,57 @@ def test_autopilot_policy_drives_raw_localization_cautiously() -> None:
     given = AutopilotConfig.from_dict({"control_rate": 40.0})
     kept = AutopilotPolicy(env, given)
     assert kept.autopilot.config == given
+
+
+def test_dict_pose_in_every_localization_mode() -> None:
+    """Dict mode's pose is what localization holds in every mode: the EKF's
+    estimate (fused), the frame tree's last broadcast (raw, truth; truth
+    exactly the antenna's pose at the last 20 Hz broadcast); invalid and zero
+    before there is one."""
+    for mode in ("truth", "raw", "fused"):
+        env = ConeTrackEnv(localization=mode, observation="dict")
+        obs, _ = env.reset(seed=0)
+        assert obs["pose_valid"][0] == (1.0 if mode == "truth" else 0.0), mode
+        for _ in range(50):  # 1 s at 50 Hz, accelerating
+            obs, _, _, _, _ = env.step(np.array([0.0, 0.5], dtype=np.float32))
+        assert env.observation_space.contains(obs)
+        assert obs["pose_valid"][0] == 1.0
+        antenna = env.stack.world.antenna_pose
+        error = math.hypot(obs["pose"][0] - antenna.x, obs["pose"][1] - antenna.y)
+        # 1 s, broadcast every 50 ms = every 2.5 control steps: the truth
+        # broadcast is this step's (t = 1.0 s is on the grid).
+        assert error < {"truth": 1e-5, "raw": 0.2, "fused": 0.05}[mode], (mode, error)
+        cov = obs["pose_covariance"]
+        if mode == "fused":
+            assert 0.0 < cov[0, 0] < 0.01 and cov[2, 2] > 0.0
+        else:
+            assert not cov.any()
+        env.close()
+
+
+def test_config_types_numpy_integers_yes_bools_and_strings_no() -> None:
+    """A numpy integer is an integer (parameter sweeps); a bool is not a lap
+    count, a string is not a flag, a list is not a set of reward weights."""
+    cfg = EnvConfig(laps=np.int64(2), max_cones=np.int64(16), control_rate=np.float32(25.0))
+    assert (cfg.laps, cfg.max_cones, cfg.substeps) == (2, 16, 8)
+    bad = {
+        "laps": True,
+        "terminate_off_track": "no",
+        "rewards": [1, 2],
+        "track": 5,
+        "sensors": 5,
+        "time_limit": "60",
+    }
+    for key, value in bad.items():
+        with pytest.raises(ValueError, match=f"EnvConfig.{key}"):
+            EnvConfig.from_dict({key: value})
+
+
+@pytest.mark.parametrize("start", [(0.0, 0.0), "abc", "123", (0.0, math.nan, 0.0), 5])
+def test_bad_start_pose_option_is_named(start: object) -> None:
+    env = ConeTrackEnv()
+    env.reset(seed=0)
+    before = env.stack
+    with pytest.raises(ValueError, match="reset option start_pose"):
+        env.reset(seed=0, options={"start_pose": start})
+    assert env.stack is before
