@@ -334,13 +334,3 @@ def step(space: pymunk.Space, vehicle: Vehicle, dt: float) -> VehicleState:
     space.step(dt)
     vehicle.post_step()
     return vehicle.state
-
-
-def cg_pose_from_front_wing(params: VehicleParams, front_wing: Pose2D) -> Pose2D:
-    """CG pose from the pose of the front wing tip (fssim ``starting_pose_front_wing``)."""
-    d = params.cg_to_front + params.front_overhang
-    return Pose2D(
-        front_wing.x - d * math.cos(front_wing.yaw),
-        front_wing.y - d * math.sin(front_wing.yaw),
-        front_wing.yaw,
-    )

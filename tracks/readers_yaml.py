@@ -18,13 +18,18 @@ Our own format (version 1)::
 fssim (REFERENCES.md, "Track file formats"; AMZ fssim ``tracks_yaml``):
 ``cones_left`` (blue), ``cones_right`` (yellow), ``cones_orange``,
 ``cones_orange_big`` (lists of [x, y]) and ``starting_pose_front_wing`` or
-``starting_pose_cg`` ([x, y, yaw]). Known fssim extras that carry no cones
+``starting_pose_cg`` ([x, y, yaw]). fssim places its car by the tip of the
+front wing; the track's start pose is the CG's, ``FSSIM_CG_TO_FRONT_WING``
+behind it along the heading (the default vehicle's CG-to-front-axle plus
+front overhang, ``sim.vehicle_params``; a test keeps the two equal, as
+``tracks`` may not import ``sim``). Known fssim extras that carry no cones
 are ignored: ``tk_device`` (timekeeping device positions), ``lap_threshold``
 and ``middle_points`` (written by fssim track editors). Any other key is an error.
 """
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import yaml
@@ -46,6 +51,7 @@ FSSIM_CONES = {
     "cones_orange_big": ConeKind.BIG_ORANGE,
 }
 FSSIM_POSES = ("starting_pose_front_wing", "starting_pose_cg")
+FSSIM_CG_TO_FRONT_WING = 1.515  # [m] CG to the front wing tip, along the heading
 FSSIM_IGNORED = {"tk_device", "lap_threshold", "middle_points"}
 FSSIM_KEYS = set(FSSIM_CONES) | set(FSSIM_POSES) | FSSIM_IGNORED
 
@@ -99,9 +105,22 @@ def read_fssim_yaml(root: yaml.Node, path: Path) -> RawTrack:
                 raw.cones.append(RawCone(x, y, kind, line))
     for key in FSSIM_POSES:  # the front wing pose wins when both are given
         if key in entries and not yn.is_null(entries[key]):
-            raw.start_pose = _pose(entries[key], path, key)
+            pose = _pose(entries[key], path, key)
+            if key == "starting_pose_front_wing":
+                pose = cg_pose_from_front_wing(pose)
+            raw.start_pose = pose
             break
     return raw
+
+
+def cg_pose_from_front_wing(front_wing: Pose2D) -> Pose2D:
+    """The CG's pose from the front wing tip's (fssim ``starting_pose_front_wing``)."""
+    d = FSSIM_CG_TO_FRONT_WING
+    return Pose2D(
+        front_wing.x - d * math.cos(front_wing.yaw),
+        front_wing.y - d * math.sin(front_wing.yaw),
+        front_wing.yaw,
+    )
 
 
 def is_fssim(entries: dict[str, yaml.Node]) -> bool:

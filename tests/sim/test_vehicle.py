@@ -18,7 +18,7 @@ from scipy.optimize import brentq
 
 from localization.pose import Pose2D
 from sim.tyres import PacejkaParams
-from sim.vehicle import Vehicle, VehicleState, cg_pose_from_front_wing, step
+from sim.vehicle import Vehicle, VehicleState, step
 from sim.vehicle_params import VehicleParams
 
 DT = 1.0 / 200.0  # [s] default physics rate (ARCHITECTURE.md)
@@ -271,9 +271,6 @@ def test_state_reports_the_start_pose_and_speed() -> None:
     car = Vehicle(space, VehicleParams(), Pose2D(3.0, -2.0, 1.0), speed=4.0)
     s = car.state
     assert (s.x, s.y, s.yaw, s.vx, s.vy) == pytest.approx((3.0, -2.0, 1.0, 4.0, 0.0))
-    front_wing = Pose2D(3.0 + 1.515 * math.cos(1.0), -2.0 + 1.515 * math.sin(1.0), 1.0)
-    cg = cg_pose_from_front_wing(VehicleParams(), front_wing)
-    assert_allclose((cg.x, cg.y, cg.yaw), (3.0, -2.0, 1.0), atol=1e-12)
 
 
 def test_space_must_have_no_gravity_or_damping() -> None:
