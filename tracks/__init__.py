@@ -10,6 +10,8 @@ module ``localization.pose`` only.
 
 from __future__ import annotations
 
+import logging
+
 from tracks.derived import SkidpadCircle, TrackGeometry
 from tracks.errors import TrackFormatError, TrackGeometryError, TrackNotFoundError
 from tracks.geometry import derive_start_pose, detect_layout
@@ -43,3 +45,6 @@ __all__ = [
     "validate_track",
     "write_track",
 ]
+
+# A library logs, the application shows (see ``localization/__init__``).
+logging.getLogger(__name__).addHandler(logging.NullHandler())
