@@ -7,21 +7,28 @@ Subcommands:
   and the global path coloured by covariance status.
 * ``conesim track check NAME|PATH [--json]``: the Formula Student validator.
 * ``conesim run``: one headless closed-loop scenario (``envs.runner``): a
-  results table, ``DIR/result.json`` and ``DIR/run.png``.
+  results table, ``DIR/result.json`` and ``DIR/run.png``. A track in which
+  ``track check`` finds errors is bad input for ``run`` (warnings are not).
+
+``-v`` (log the nodes' warnings) goes before or after the subcommand.
 
 Exit codes: 0 success (``run``: every lap completed), 1 a check found errors
 or a run did not finish (off track, stuck, time limit), 2 bad input (one line
-on stderr naming the file and what is wrong; never a traceback).
+on stderr per problem, naming the file or option and what is wrong; never a
+traceback; nothing written).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import logging
+import math
 import os
 import sys
-from collections.abc import Sequence
+import tempfile
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import TextIO
 
@@ -33,7 +40,6 @@ from localization.geodesy import GeodesyError
 from localization.global_path import (
     GlobalPath,
     GlobalPathError,
-    atomic_write_text,
     global_path_for_track,
 )
 from sim.sensors import PROFILES as SENSOR_PROFILES
@@ -53,8 +59,11 @@ EXIT_BAD_INPUT = 2
 INPUT_ERRORS = (TrackFormatError, GlobalPathError, GeodesyError, FileNotFoundError)
 
 
+VERBOSE_HELP = "log the nodes' warnings (rejected messages)"
+
+
 class CliError(Exception):
-    """Bad input found by the command line itself."""
+    """Bad input found by the command line itself (one line per problem)."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -63,23 +72,38 @@ def build_parser() -> argparse.ArgumentParser:
         prog="conesim",
         description="Closed-loop 2D simulator for Formula Student cone tracks.",
     )
-    parser.add_argument(
-        "-v", "--verbose", action="store_true", help="log the nodes' warnings (rejected messages)"
+    parser.add_argument("-v", "--verbose", action="store_true", help=VERBOSE_HELP)
+    # -v after the subcommand too; SUPPRESS keeps a -v given before it.
+    verbose = argparse.ArgumentParser(add_help=False)
+    verbose.add_argument(
+        "-v", "--verbose", action="store_true", default=argparse.SUPPRESS, help=VERBOSE_HELP
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    sub.add_parser("tracks", help="list the shipped tracks with length, cones and width range")
+    sub.add_parser(
+        "tracks",
+        parents=[verbose],
+        help="list the shipped tracks with length, cones and width range",
+    )
 
-    track = sub.add_parser("track", help="inspect one track (shipped name or file)")
+    track = sub.add_parser(
+        "track", parents=[verbose], help="inspect one track (shipped name or file)"
+    )
     track_sub = track.add_subparsers(dest="track_command", required=True, metavar="ACTION")
-    show = track_sub.add_parser("show", help="draw cones and global path to a PNG")
+    show = track_sub.add_parser(
+        "show", parents=[verbose], help="draw cones and global path to a PNG"
+    )
     show.add_argument("track", help="shipped track name or a track file (conesim/fssim/EUFS/FSDS)")
     show.add_argument("--out", required=True, help="output PNG file")
-    check = track_sub.add_parser("check", help="validate against Formula Student rules")
+    check = track_sub.add_parser(
+        "check", parents=[verbose], help="validate against Formula Student rules"
+    )
     check.add_argument("track", help="shipped track name or a track file")
     check.add_argument("--json", action="store_true", help="print one JSON object")
 
-    run = sub.add_parser("run", help="run one headless closed-loop scenario with the autopilot")
+    run = sub.add_parser(
+        "run", parents=[verbose], help="run one headless closed-loop scenario with the autopilot"
+    )
     run.add_argument("--track", default=DEFAULT_TRACK, help="shipped track name or a track file")
     run.add_argument("--laps", type=int, default=1, help="laps to drive (default 1)")
     run.add_argument("--seed", type=int, default=0, help="episode seed (default 0)")
@@ -108,13 +132,34 @@ def cmd_tracks() -> int:
     return EXIT_OK
 
 
+def _load_track(name: str, option: str) -> Track:
+    """``load_track`` that refuses an empty name (which would read the current directory)."""
+    if not name.strip():
+        raise CliError(f"{option}: empty track name; give a shipped track name or a track file")
+    return load_track(name)
+
+
 def cmd_track_show(name: str, out: str) -> int:
     """Draw a track and its global path to a PNG."""
+    if not out.strip():
+        raise CliError("--out: empty file name; give a .png file name")
     if not out.lower().endswith(".png"):
         raise CliError(f"--out {out}: the picture is written as PNG, give a .png file name")
-    track = load_track(name)
+    target = Path(out)
+    try:
+        if target.is_dir():
+            raise CliError(f"--out {out}: is a directory; give a .png file name")
+        base = _nearest_existing(target.parent)
+    except OSError as exc:
+        raise CliError(f"--out {out}: cannot write there ({_reason(exc)})") from None
+    if not base.is_dir():
+        raise CliError(f"--out {out}: {base} is not a directory")
+    track = _load_track(name, "track")
     path = global_path_for_track(track)
-    written = save_track_picture(track, path, out)
+    try:
+        written = save_track_picture(track, path, target)
+    except OSError as exc:
+        raise CliError(f"--out {out}: cannot write the picture ({_reason(exc)})") from None
     red = int(path.high_covariance.sum())
     print(
         f"wrote {written}: {track.name}, {len(track.cones)} cones, global path "
@@ -126,7 +171,7 @@ def cmd_track_show(name: str, out: str) -> int:
 
 def cmd_track_check(name: str, as_json: bool) -> int:
     """Validate a track; exit 0 when it has no errors."""
-    track = load_track(name)
+    track = _load_track(name, "track")
     global_path_for_track(track)  # a malformed global path CSV is bad input too
     report = check_report(track)
     if as_json:
@@ -150,16 +195,23 @@ MAX_LAPS = 100
 def cmd_run(args: argparse.Namespace) -> int:
     """Run one scenario; write result.json and run.png; print the results.
 
-    Every input is checked before the run (track, laps, seed, output
-    directory, the render extra), so bad input costs no simulation; the two
-    outputs are written to temporary files and moved into place together.
+    Every input is checked before the run (track, including the validator
+    that ``track check`` runs, laps, seed, output directory, the render
+    extra), so bad input costs no simulation and writes nothing; the output
+    directory is created only once the results exist, and the two outputs
+    are written to temporary files and moved into place together.
     """
     if not 1 <= args.laps <= MAX_LAPS:
         raise CliError(f"--laps {args.laps}: must be in [1, {MAX_LAPS}]")
     if not 0 <= args.seed < 2**63:
         raise CliError(f"--seed {args.seed}: must be a non-negative integer below 2**63")
-    track = load_track(args.track)
+    if not args.out.strip():
+        raise CliError("--out: empty directory name; give the output directory")
+    track = _load_track(args.track, "--track")
     global_path = global_path_for_track(track)
+    errors = check_report(track)["errors"]
+    if errors:
+        raise CliError("\n".join(f"{args.track}: {error}" for error in errors))
     out = Path(args.out)
     _check_output_dir(out)
     if args.render:
@@ -185,15 +237,41 @@ def cmd_run(args: argparse.Namespace) -> int:
     return EXIT_OK if result.finished else EXIT_FAILED
 
 
+OUTPUT_FILES = ("run.png", "result.json")  # the order they are moved into place
+
+
+def _reason(exc: OSError) -> str:
+    """An OSError's reason without the (possibly temporary) file name."""
+    return exc.strerror or type(exc).__name__
+
+
 def _check_output_dir(out: Path) -> None:
-    """Create ``--out`` and prove it writable, before any simulation."""
+    """Prove ``--out`` can be created and written, before any simulation, creating nothing.
+
+    The directory itself, or its nearest existing ancestor when it does not
+    exist yet, must be a writable directory (a probe file is created there and
+    removed), and neither output may exist as a directory.
+    """
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        probe = out / f".conesim-write-test-{os.getpid()}"
-        probe.write_bytes(b"")
-        probe.unlink()
+        base = _nearest_existing(out)
+        if not base.is_dir():
+            where = "is not a directory" if base == out else f"{base} is not a directory"
+            raise CliError(f"--out {out}: {where}")
+        for name in OUTPUT_FILES:
+            if (out / name).is_dir():
+                raise CliError(f"--out {out}: {out / name} is a directory, not a file")
+        fd, probe = tempfile.mkstemp(prefix=".conesim-write-test-", dir=base)
+        os.close(fd)
+        os.unlink(probe)
     except OSError as exc:
-        raise CliError(f"--out {out}: cannot write there ({exc.strerror or exc})") from None
+        raise CliError(f"--out {out}: cannot write there ({_reason(exc)})") from None
+
+
+def _nearest_existing(path: Path) -> Path:
+    """``path`` itself if it exists, else its nearest existing ancestor."""
+    while not path.exists() and path != path.parent:
+        path = path.parent
+    return path
 
 
 def _check_render_extra() -> None:
@@ -208,19 +286,47 @@ def _check_render_extra() -> None:
 def _write_outputs(
     out: Path, payload: str, result: RunResult, track: Track, global_path: GlobalPath
 ) -> None:
-    """Write run.png and result.json to temporary names, then move both into place."""
-    tmp_png = out / f".run.png.{os.getpid()}.tmp"
-    tmp_json = out / f".result.json.{os.getpid()}.tmp"
+    """Write run.png and result.json into ``out``: both, or nothing.
+
+    Both go to temporary names first and are moved into place only when both
+    were written; if the second move fails, the first is removed again, and
+    directories this call created are removed on any failure.
+    """
+    created = _missing_dirs(out)
+    tmp = {name: out / f".{name}.{os.getpid()}.tmp" for name in OUTPUT_FILES}
+    moved: list[Path] = []
     try:
-        save_run_picture(result, track, global_path, tmp_png)
-        atomic_write_text(tmp_json, payload + "\n")
-        os.replace(tmp_png, out / "run.png")
-        os.replace(tmp_json, out / "result.json")
+        out.mkdir(parents=True, exist_ok=True)
+        save_run_picture(result, track, global_path, tmp["run.png"])
+        tmp["result.json"].write_text(payload + "\n", encoding="utf-8")
+        for name in OUTPUT_FILES:
+            os.replace(tmp[name], out / name)
+            moved.append(out / name)
     except OSError as exc:
-        raise CliError(f"--out {out}: cannot write the results ({exc.strerror or exc})") from None
-    finally:
-        tmp_png.unlink(missing_ok=True)
-        tmp_json.unlink(missing_ok=True)
+        for path in moved:
+            path.unlink(missing_ok=True)
+        _remove_temporaries(tmp.values())
+        for directory in reversed(created):
+            with contextlib.suppress(OSError):
+                directory.rmdir()
+        raise CliError(f"--out {out}: cannot write the results ({_reason(exc)})") from None
+    _remove_temporaries(tmp.values())
+
+
+def _missing_dirs(out: Path) -> list[Path]:
+    """The directories ``out.mkdir(parents=True)`` would create, outermost first."""
+    base = _nearest_existing(out)
+    missing = []
+    while out != base:
+        missing.append(out)
+        out = out.parent
+    return missing[::-1]
+
+
+def _remove_temporaries(paths: Iterable[Path]) -> None:
+    for path in paths:
+        with contextlib.suppress(OSError):
+            path.unlink(missing_ok=True)
 
 
 def format_result(result: RunResult, out: Path) -> str:
@@ -229,7 +335,9 @@ def format_result(result: RunResult, out: Path) -> str:
     def num(value: float | None, fmt: str) -> str:
         return "n/a" if value is None else format(value, fmt)
 
-    laps = ", ".join(f"{t:.2f}" for t in result.lap_times_s) or "none"
+    laps = ", ".join(f"{t:.2f} s" for t in result.lap_times_s) or "none"
+    ratio = result.lap_time_ratio
+    best = "n/a" if ratio is None or not math.isfinite(ratio) else f"{ratio:.2f}x"
     rows = [
         (
             "track",
@@ -237,10 +345,10 @@ def format_result(result: RunResult, out: Path) -> str:
             f"localization, seed {result.seed})",
         ),
         ("finished", f"{'yes' if result.finished else 'no'} ({result.end_reason})"),
-        ("laps", f"{result.laps_completed}/{result.laps}: {laps} s"),
+        ("laps", f"{result.laps_completed}/{result.laps}: {laps}"),
         (
             "limit lap",
-            f"{result.limit_lap_time_s:.2f} s (best lap x{num(result.lap_time_ratio, '.2f')})",
+            f"{result.limit_lap_time_s:.2f} s (best lap {best})",
         ),
         ("cones hit / DOO", f"{result.cones_hit} / {result.cones_down_or_out}"),
         ("off-track events", str(result.off_track_events)),
@@ -302,7 +410,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "run":
             return cmd_run(args)
     except (*INPUT_ERRORS, CliError) as exc:
-        print(f"conesim: error: {exc}", file=sys.stderr)
+        for line in str(exc).splitlines() or [""]:
+            print(f"conesim: error: {line}", file=sys.stderr)
         return EXIT_BAD_INPUT
     raise AssertionError(f"unhandled command {args.command!r}")  # argparse prevents this
 

@@ -56,7 +56,7 @@ def save_run_picture(result: RunResult, track: Track, path: GlobalPath, out: Pat
     ratio = result.lap_time_ratio
     ax_speed.set_title(
         f"laps [s]: {laps}; limit {result.limit_lap_time_s:.2f} s"
-        + ("" if ratio is None or not math.isfinite(ratio) else f" (x{ratio:.2f})")
+        + ("" if ratio is None or not math.isfinite(ratio) else f" ({ratio:.2f}x)")
     )
     ax_speed.legend(loc="lower right", fontsize=7)
     ax_speed.grid(True, lw=0.3)

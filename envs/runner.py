@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -21,9 +22,10 @@ from scipy.spatial import cKDTree
 from envs.autopilot_policy import AutopilotPolicy
 from envs.cone_track_env import ConeTrackEnv
 from envs.limit_lap import limit_lap_time
+from localization.geodesy import GeodesyError
 from sim.progress import PolylineProgress
 from sim.race_control import line_crossings_along
-from tracks import Track
+from tracks import Track, TrackFormatError, load_track
 
 MIDLINE_SAMPLE_M = 0.05  # [m] spacing of the densified true centreline
 
@@ -127,19 +129,40 @@ def run_scenario(
         render: show a window (the ``render`` extra).
         progress: called as ``progress(sim_time, time_limit)`` every control step.
         env_options: further ``EnvConfig`` fields.
+
+    Raises:
+        TrackFormatError: the track cannot be read, or the world cannot be
+            built on it (the message names the track and its start pose).
     """
-    env = ConeTrackEnv(
-        render_mode="human" if render else None,
-        track=track,
-        laps=laps,
-        sensors=sensors,
-        localization=localization,
-        **(env_options or {}),
-    )
+    with _world_build_errors(track):
+        env = ConeTrackEnv(
+            render_mode="human" if render else None,
+            track=track,
+            laps=laps,
+            sensors=sensors,
+            localization=localization,
+            **(env_options or {}),
+        )
     try:
         return _drive(env, seed, progress)
     finally:
         env.close()
+
+
+@contextmanager
+def _world_build_errors(track: str) -> Iterator[None]:
+    """Name the track and its start pose when the world cannot be built on it.
+
+    Such a failure (the start pose out of the geodesy's range) is the track
+    file's fault, so it becomes a `TrackFormatError` naming the file.
+    """
+    try:
+        yield
+    except GeodesyError as exc:
+        pose = load_track(track).start_pose
+        raise TrackFormatError(
+            f"cannot build the world at the start pose ({pose.x:g}, {pose.y:g}): {exc}", track
+        ) from None
 
 
 def _drive(
@@ -147,7 +170,8 @@ def _drive(
 ) -> RunResult:
     cfg = env.config
     wall0 = time.perf_counter()
-    _, info = env.reset(seed=seed)
+    with _world_build_errors(cfg.track):
+        _, info = env.reset(seed=seed)
     policy = AutopilotPolicy(env)
     action = policy.reset(info)
     track = env.stack.track

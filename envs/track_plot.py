@@ -7,6 +7,7 @@ otherwise; this is the same picture as a PNG, with the cones in their FS colours
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
 
@@ -95,11 +96,30 @@ def save_track_picture(
 
 
 def save_figure(fig: Figure, out: Path) -> None:
-    """Save ``fig`` as PNG at ``out`` atomically (temporary file + ``os.replace``)."""
-    out.parent.mkdir(parents=True, exist_ok=True)
+    """Save ``fig`` as PNG at ``out`` atomically (temporary file + ``os.replace``).
+
+    Missing parent directories are created, and removed again if the picture
+    cannot be written, so a failure leaves nothing behind.
+
+    Raises:
+        OSError: ``out`` cannot be written (its ``filename`` may be the
+            temporary file; name ``out`` in messages).
+    """
+    missing = []
+    parent = out.parent
+    while not parent.exists() and parent != parent.parent:
+        missing.append(parent)
+        parent = parent.parent
     tmp = out.with_name(f".{out.name}.tmp.png")
     try:
+        out.parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(tmp, bbox_inches="tight", format="png")
         os.replace(tmp, out)
+    except OSError:
+        for directory in missing:  # innermost first
+            with contextlib.suppress(OSError):
+                directory.rmdir()
+        raise
     finally:
-        tmp.unlink(missing_ok=True)
+        with contextlib.suppress(OSError):
+            tmp.unlink(missing_ok=True)

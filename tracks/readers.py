@@ -6,10 +6,11 @@ Formats (see readers_yaml.py and readers_csv.py): our own YAML
 does not matter: an EUFS file named ``.txt`` is read as EUFS.
 
 After parsing, every format goes through the same checks (``assemble``):
-no two cones closer than 0.1 m (cones are 0.23 m wide, so such a pair is a
-duplicate), at least 3 blue and 3 yellow cones, a layout (detected when the
-format does not state it), a start pose (derived from the big orange cones
-when the file has none) and a derivable geometry. Every problem raises
+cones and start pose within ``MAX_COORDINATE`` of the origin, no two cones
+closer than 0.1 m (cones are 0.23 m wide, so such a pair is a duplicate), at
+least 3 blue and 3 yellow cones, a layout (detected when the format does not
+state it), a start pose (derived from the big orange cones when the file has
+none) and a derivable geometry. Every problem raises
 `TrackFormatError` naming the file and, where there is one, the line.
 """
 
@@ -17,6 +18,7 @@ from __future__ import annotations
 
 import logging
 import os
+import stat
 from enum import StrEnum
 from pathlib import Path
 
@@ -68,17 +70,27 @@ def read_track(path: str | os.PathLike[str]) -> Track:
 
 
 def read_text(path: Path) -> str:
-    """The file's text, refusing missing, empty, huge, binary and non-UTF-8 files."""
+    """The file's text, refusing missing, empty, huge, binary and non-UTF-8 files.
+
+    Only a regular file is read (a device such as ``/dev/zero`` or a FIFO is
+    refused before it is opened), and at most ``MAX_FILE_BYTES + 1`` bytes
+    are read whatever the file system reports as its size.
+    """
     try:
-        if path.stat().st_size > MAX_FILE_BYTES:
-            raise TrackFormatError(f"file is larger than {MAX_FILE_BYTES} bytes", path)
-        data = path.read_bytes()
+        if not stat.S_ISREG(path.stat().st_mode):
+            if path.is_dir():
+                raise TrackFormatError("is a directory, not a track file", path)
+            raise TrackFormatError("not a regular file (a device, FIFO or socket?)", path)
+        with path.open("rb") as file:
+            data = file.read(MAX_FILE_BYTES + 1)
     except FileNotFoundError:
         raise TrackFormatError("no such file", path) from None
     except IsADirectoryError:
         raise TrackFormatError("is a directory, not a track file", path) from None
     except OSError as exc:
-        raise TrackFormatError(f"cannot read: {exc.strerror}", path) from None
+        raise TrackFormatError(f"cannot read: {exc.strerror or exc}", path) from None
+    if len(data) > MAX_FILE_BYTES:
+        raise TrackFormatError(f"file is larger than {MAX_FILE_BYTES} bytes", path)
     if not data.strip():
         raise TrackFormatError("empty file", path)
     if b"\x00" in data:
@@ -122,6 +134,7 @@ def assemble(raw: RawTrack, path: Path) -> Track:
     """Check a parsed file's cones and build its `Track` (see the module docstring)."""
     _drop_exact_repeats(raw, path)
     _check_cones(raw, path)
+    _check_start_pose(raw, path)
     cones = np.array([[c.x, c.y] for c in raw.cones], dtype=float).reshape(-1, 2)
     kinds = tuple(c.kind for c in raw.cones)
     try:
@@ -194,4 +207,15 @@ def _check_cones(raw: RawTrack, path: Path) -> None:
             f"{a.kind} cone on line {a.line} (closer than {DUPLICATE_RADIUS} m)",
             path,
             b.line,
+        )
+
+
+def _check_start_pose(raw: RawTrack, path: Path) -> None:
+    """A start pose as far out as a bad cone is a units or data error too."""
+    pose = raw.start_pose
+    if pose is not None and max(abs(pose.x), abs(pose.y)) > MAX_COORDINATE:
+        raise TrackFormatError(
+            f"start pose ({pose.x:g}, {pose.y:g}) is more than {MAX_COORDINATE:g} m from "
+            "the origin",
+            path,
         )

@@ -4,13 +4,20 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 import pytest
+from matplotlib.figure import Figure
 
-from envs.cli import main
-from tracks import load_track
+from envs import cli, runner
+from envs.cli import build_parser, format_result, main
+from envs.runner import RunResult
+from localization.geodesy import GeodesyError
+from localization.global_path import GlobalPath
+from tracks import Track, load_track
 
 
 def run_cli(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
@@ -208,3 +215,223 @@ def test_track_check_reports_a_broken_global_path(
     )
     code, _, err = run_cli(["track", "check", str(track_file)], capsys)
     assert code == 2 and "t_path.csv:1" in err and "abc" in err
+
+
+def assert_bad_input(
+    code: int, out: str, err: str, *must_contain: str, lines: int | None = 1
+) -> list[str]:
+    """Exit 2, nothing on stdout, no traceback, `lines` stderr lines (None: any) with the texts."""
+    assert code == 2, err
+    assert out == ""
+    assert "Traceback" not in err
+    got = err.strip().splitlines()
+    if lines is not None:
+        assert len(got) == lines, err
+    assert all(line.startswith("conesim: error: ") for line in got), err
+    for text in must_contain:
+        assert text in err, err
+    return got
+
+
+def write_reversed_fssim(path: Path) -> None:
+    """The default track's fssim file with left and right swapped (blue on the right)."""
+    write_fssim(path)
+    text = path.read_text().replace("cones_left", "SWAP").replace("cones_right", "cones_left")
+    path.write_text(text.replace("SWAP", "cones_right"))
+
+
+def write_far_start_fssim(path: Path) -> None:
+    """The default track's fssim file with its start pose far outside the track."""
+    write_fssim(path)
+    path.write_text(path.read_text().replace("[-3.0, 0.0, 0.0]", "[500.0, 500.0, 0.0]"))
+
+
+@pytest.mark.parametrize(
+    ("writer", "message"),
+    [
+        (write_reversed_fssim, "blue cones lie on the right"),
+        (write_far_start_fssim, "is outside the track"),
+    ],
+)
+def test_run_refuses_a_track_that_check_reports_errors_in(
+    writer: object, message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`run` exits 2 on the errors `track check` finds, one line each naming the file."""
+    path = tmp_path / "bad.yaml"
+    writer(path)  # type: ignore[operator]
+    code, out, _ = run_cli(["track", "check", str(path), "--json"], capsys)
+    errors = json.loads(out)["errors"]
+    assert code == 1 and errors
+    out_dir = tmp_path / "run"
+    code, out, err = run_cli(["run", "--track", str(path), "--out", str(out_dir)], capsys)
+    got = assert_bad_input(code, out, err, message, lines=len(errors))
+    assert all(line.startswith(f"conesim: error: {path}: ") for line in got)
+    assert not out_dir.exists()
+
+
+def test_verbose_before_or_after_the_subcommand() -> None:
+    """`-v` works in both places and defaults to off."""
+    parser = build_parser()
+    assert parser.parse_args(["-v", "run"]).verbose
+    assert parser.parse_args(["run", "-v"]).verbose
+    assert parser.parse_args(["track", "check", "x", "--verbose"]).verbose
+    assert not parser.parse_args(["run"]).verbose
+    assert not parser.parse_args(["tracks"]).verbose
+
+
+def test_track_show_unwritable_out_names_the_users_path(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A file as parent, a directory as target, a refused write: one line naming --out."""
+    (tmp_path / "afile").write_text("not a directory")
+    (tmp_path / "adir.png").mkdir()
+    for out_file, message in (
+        (tmp_path / "afile" / "x.png", "afile is not a directory"),
+        (tmp_path / "afile" / "sub" / "x.png", "afile is not a directory"),
+        (tmp_path / "adir.png", "is a directory"),
+    ):
+        code, out, err = run_cli(["track", "show", "trackdrive", "--out", str(out_file)], capsys)
+        assert_bad_input(code, out, err, f"--out {out_file}: ", message)
+
+    def refuse(self: Figure, fname: object, **kwargs: object) -> None:
+        raise PermissionError(13, "Permission denied", str(fname))
+
+    monkeypatch.setattr(Figure, "savefig", refuse)
+    out_file = tmp_path / "new" / "sub" / "x.png"
+    code, out, err = run_cli(["track", "show", "trackdrive", "--out", str(out_file)], capsys)
+    assert_bad_input(code, out, err, f"--out {out_file}: ", "Permission denied")
+    assert ".tmp" not in err
+    assert not (tmp_path / "new").exists()
+
+
+def test_run_start_pose_out_of_range_writes_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A start pose at 1e9 m: one line naming the file and the start pose, no --out directory."""
+    source = Path(load_track("trackdrive").source or "").read_text().splitlines()
+    path = tmp_path / "huge.yaml"
+    path.write_text(
+        "\n".join(
+            "start_pose: [1.0e9, 0, 0]" if line.startswith("start_pose:") else line
+            for line in source
+            if not line.startswith("global_path:")
+        )
+    )
+    out_dir = tmp_path / "run"
+    code, out, err = run_cli(["run", "--track", str(path), "--out", str(out_dir)], capsys)
+    assert_bad_input(code, out, err, f"{path}: start pose")
+    assert not out_dir.exists()
+
+
+def test_run_world_build_failure_names_the_track(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A geodesy error while the world is built names the track file and its start pose."""
+
+    def unbuildable(**kwargs: object) -> None:
+        raise GeodesyError("local_cartesian_to_gps: longitude out of range [-180, 180] deg: 1e4")
+
+    monkeypatch.setattr(runner, "ConeTrackEnv", unbuildable)
+    path = tmp_path / "fssim.yaml"
+    write_fssim(path)
+    out_dir = tmp_path / "run"
+    code, out, err = run_cli(["run", "--track", str(path), "--out", str(out_dir)], capsys)
+    assert_bad_input(
+        code, out, err, f"{path}: cannot build the world at the start pose (", "longitude"
+    )
+    assert not out_dir.exists()
+
+
+def test_run_result_json_as_directory_is_refused_before_simulating(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """--out DIR whose result.json is a directory: exit 2 before the run, nothing written."""
+
+    def no_run(*args: object, **kwargs: object) -> None:
+        raise AssertionError("simulated despite bad output directory")
+
+    monkeypatch.setattr(cli, "run_scenario", no_run)
+    (tmp_path / "run" / "result.json").mkdir(parents=True)
+    code, out, err = run_cli(["run", "--out", str(tmp_path / "run")], capsys)
+    assert_bad_input(code, out, err, "result.json is a directory")
+    assert [p.name for p in (tmp_path / "run").iterdir()] == ["result.json"]
+
+
+def test_outputs_are_both_or_nothing(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """When the second move fails, the first output and the created directories are removed."""
+    monkeypatch.setattr(
+        cli, "save_run_picture", lambda result, track, path, out: out.write_bytes(b"png")
+    )
+    real_replace = os.replace
+
+    def replace(src: Path, dst: Path) -> None:
+        if Path(dst).name == "result.json":
+            raise IsADirectoryError(21, "Is a directory", str(src))
+        real_replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", replace)
+    out_dir = tmp_path / "new" / "run"
+    with pytest.raises(cli.CliError, match=r"cannot write the results \(Is a directory\)"):
+        cli._write_outputs(
+            out_dir, "{}", cast(RunResult, None), cast(Track, None), cast(GlobalPath, None)
+        )
+    assert list(tmp_path.iterdir()) == []
+    monkeypatch.setattr(os, "replace", real_replace)
+    cli._write_outputs(
+        out_dir, "{}", cast(RunResult, None), cast(Track, None), cast(GlobalPath, None)
+    )
+    assert sorted(p.name for p in out_dir.iterdir()) == ["result.json", "run.png"]
+
+
+@pytest.mark.skipif(not Path("/dev/zero").exists(), reason="needs a /dev/zero device")
+def test_device_file_as_track_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """/dev/zero is not a track file: one line, no MemoryError, nothing written."""
+    for args in (
+        ["track", "check", "/dev/zero"],
+        ["run", "--track", "/dev/zero", "--out", str(tmp_path / "run")],
+    ):
+        code, out, err = run_cli(args, capsys)
+        assert_bad_input(code, out, err, "/dev/zero: not a regular file")
+    assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["run", "--track", ""], "--track: empty track name"),
+        (["track", "check", ""], "empty track name"),
+        (["track", "show", "", "--out", "x.png"], "empty track name"),
+        (["run", "--out", ""], "--out: empty directory name"),
+        (["track", "show", "trackdrive", "--out", ""], "--out: empty file name"),
+    ],
+)
+def test_empty_names_are_refused(
+    args: list[str], message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An empty track or output name is bad input with a clear line (not '.: is a directory')."""
+    code, out, err = run_cli(args, capsys)
+    assert_bad_input(code, out, err, message)
+
+
+def make_result(lap_times: list[float], limit: float = 14.94) -> RunResult:
+    """A RunResult with the given laps of a 1-lap run and neutral other fields."""
+    best = min(lap_times) if lap_times else None
+    return RunResult(
+        track="trackdrive", seed=0, sensors="rtk", localization="fused", laps=1,
+        finished=bool(lap_times), end_reason="laps" if lap_times else "off_track",
+        laps_completed=len(lap_times), lap_times_s=lap_times, best_lap_s=best,
+        cones_hit=0, cones_down_or_out=0, off_track_events=0, sim_time_s=1.0,
+        wall_time_s=1.0, real_time_factor=1.0, localization_pos_rmse_m=None,
+        localization_yaw_rmse_deg=None, midline_rmse_m=None, planner_fallbacks=0,
+        limit_lap_time_s=limit, lap_time_ratio=None if best is None else best / limit,
+    )  # fmt: skip
+
+
+def test_results_table_text() -> None:
+    """No lap: 'none' without a unit and 'n/a'; a lap: seconds and the ratio as '1.14x'."""
+    table = format_result(make_result([]), Path("out"))
+    assert "laps               0/1: none\n" in table
+    assert "limit lap          14.94 s (best lap n/a)\n" in table
+    table = format_result(make_result([17.03]), Path("out"))
+    assert "1/1: 17.03 s\n" in table
+    assert "(best lap 1.14x)" in table

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,7 @@ from tracks import (
     detect_format,
     load_track,
     read_track,
+    readers,
     shipped_tracks,
 )
 
@@ -369,6 +371,12 @@ BAD_FILES = [
         "more than 1e+06 m from the origin",
     ),
     ("dupkey.yaml", OWN_YAML + "name: again\n", 11, "duplicate key 'name'"),
+    (
+        "far_start.yaml",
+        OWN_YAML.replace("[-2.0, 0.0, 0.0]", "[1.0e9, 0.0, 0.0]"),
+        None,
+        "start pose (1e+09, 0) is more than 1e+06 m from the origin",
+    ),
 ]
 
 
@@ -398,6 +406,32 @@ def test_missing_file_and_directory(tmp_path: Path) -> None:
         read_track(tmp_path / "nope.csv")
     with pytest.raises(TrackFormatError, match="directory"):
         read_track(tmp_path)
+
+
+@pytest.mark.skipif(not Path("/dev/zero").exists(), reason="needs a /dev/zero device")
+def test_device_file_is_refused_without_reading_it() -> None:
+    """A character device (st_size 0, endless data) is refused as not a regular file."""
+    with pytest.raises(TrackFormatError, match="not a regular file") as info:
+        read_track(Path("/dev/zero"))
+    assert str(info.value).startswith("/dev/zero: ")
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs os.mkfifo")
+def test_fifo_is_refused_without_blocking(tmp_path: Path) -> None:
+    """A FIFO is refused before it is opened (opening one would wait for a writer)."""
+    fifo = tmp_path / "track.fifo"
+    os.mkfifo(fifo)
+    with pytest.raises(TrackFormatError, match="not a regular file"):
+        read_track(fifo)
+
+
+def test_read_stops_after_the_size_cap(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """At most MAX_FILE_BYTES + 1 bytes are read, whatever the reported size."""
+    monkeypatch.setattr(readers, "MAX_FILE_BYTES", 64)
+    path = write(tmp_path, "big.yaml", OWN_YAML)
+    with pytest.raises(TrackFormatError, match="larger than 64 bytes") as info:
+        read_track(path)
+    assert info.value.path == str(path)
 
 
 def test_load_track_by_name_and_path(tmp_path: Path) -> None:
