@@ -29,7 +29,9 @@ rather than on the first detection.
 
 Every intermediate is an attribute for drawing and recording: ``classified``
 (left/right cones in ``reference``), ``plan`` (bridge lines, midpoints, path,
-waypoints with speeds, status), ``path_now`` and ``lookahead_point`` (current
+waypoints with speeds, status), ``path_now``, ``pursuit_path`` (the path
+pure pursuit follows: ``path_now``, continued along the global path when it
+ends inside the lookahead circle) and ``lookahead_point`` (current
 ``os_sensor``), ``command``; and counters ``plan_count``, ``fallback_count``,
 ``failed_count``, ``tf_latest_count``, ``skipped_count``.
 """
@@ -127,6 +129,7 @@ class Autopilot:
         self.plan: LocalPlan | None = None
         self.path_reference: FloatArray = np.zeros((0, 2))
         self.path_now: FloatArray = np.zeros((0, 2))
+        self.pursuit_path: FloatArray = np.zeros((0, 2))
         self.steering: SteeringResult | None = None
         self.path_curvature: FloatArray = np.zeros(0)  # [1/m] global, at the waypoints
         self.target_speed = 0.0  # [m/s]
@@ -282,12 +285,15 @@ class Autopilot:
         speed = self.speed()
         path = self._path_in_sensor_frame()
         if len(path) == 0 or self.plan is None:
+            self.pursuit_path = path
             self.steering = None
             self.target_speed = 0.0
             acceleration = self.speed_controller.step(0.0, speed, dt)
             self.command = ControlCommand(t, 0.0, acceleration)
             return self.command
-        self.steering = pure_pursuit(path, speed, c.pure_pursuit, self._lookahead_cap(path, speed))
+        cap = self._lookahead_cap(path, speed)
+        self.pursuit_path = self._pursuit_path(path, speed, cap)
+        self.steering = pure_pursuit(self.pursuit_path, speed, c.pure_pursuit, cap)
         axle = np.array([c.pure_pursuit.rear_axle_x, 0.0])
         v_ref, a_ff = target_on_path(path, self.plan.speeds, axle, speed, c.speed_control)
         self.target_speed = v_ref
@@ -315,6 +321,45 @@ class Autopilot:
         ahead = (s >= s[nearest]) & (s <= s[nearest] + lookahead_distance(speed, pp))
         kappa = float(np.max(np.abs(self.path_curvature[ahead])))
         return pp.lookahead_radius_ratio / kappa if kappa > 0.0 else None
+
+    def _pursuit_path(self, path: FloatArray, speed: float, cap: float | None) -> FloatArray:
+        """The path pure pursuit follows, ``os_sensor`` [m]: the local path, and
+        when it ends inside the lookahead circle (``pursue_global_beyond_path``),
+        the global path from the station of its end to one lookahead distance
+        (plus 2 m) beyond, every 0.5 m.
+
+        The end's station is looked for from 5 m behind the sensor's station
+        at the plan to the planner's range ahead of it, so that the skidpad's
+        crossing does not put it on the other circle.
+        """
+        c = self.config
+        pp = c.pure_pursuit
+        gs = self.global_speed
+        hint = self.station_hint
+        if not c.pursue_global_beyond_path or gs is None or hint is None:
+            return path
+        if len(self.path_reference) == 0:
+            return path
+        look = lookahead_distance(speed, pp)
+        if cap is not None:
+            look = max(min(look, cap), pp.lookahead_min)
+        end_x, end_y = float(path[-1, 0]), float(path[-1, 1])
+        if math.hypot(end_x - pp.rear_axle_x, end_y) >= look:
+            return path
+        window = (hint - 5.0, hint + c.midline.max_range)
+        end = self.projector.project(self.path_reference[-1:], window=window)
+        stations = float(end.station[0]) + np.arange(0.5, look + 2.0, 0.5)
+        if not gs.closed:
+            stations = stations[stations <= gs.length]
+            if len(stations) == 0:
+                return path
+        try:
+            beyond = self.buffer.transform_points(
+                c.sensor_frame, c.reference_frame, gs.points_at(stations), LATEST
+            )
+        except TransformError:
+            return path
+        return np.vstack([path, beyond])
 
     def _path_in_sensor_frame(self) -> FloatArray:
         """The plan's path in the latest ``os_sensor`` frame (the planned one if that fails)."""

@@ -410,6 +410,16 @@ class AutopilotConfig(Settings):
             (+-15 % in speed on the skidpad's circle at 0.5 m spacing) and
             the car braked hard at every dip. ``"local"``: the local path's
             own speed profile, ending at the global speed.
+        pursue_global_beyond_path: when the local path ends inside pure
+            pursuit's lookahead circle, pursue the global path beyond its end
+            (``Autopilot.pursuit_path``) instead of the path's last point.
+            With the fssim LiDAR (15 m, 0.2 s latency) the cone path at
+            17-19 m/s is often 3-9 m long, shorter than the 7-10 m
+            lookahead; aiming at its end, a point 2-4 m ahead, the car turned
+            into the trackdrive's S-bend late and left the track in 9 of 60
+            seeds (0-59, ``benchmarks/bench_laps.py``); pursuing the global
+            path beyond the end, in none, at the same lap times. The steering
+            still follows the cones wherever they reach that far.
         speed_window: span of the frame-tree speed estimate used when no wheel
             speed has arrived [s].
         reference_frame: the world frame (a vehicle prefix is allowed).
@@ -424,6 +434,7 @@ class AutopilotConfig(Settings):
     control_rate: float = 50.0  # [Hz]
     global_speed: bool = True
     speed_source: str = "global"
+    pursue_global_beyond_path: bool = True
     speed_window: float = 0.1  # [s]
     reference_frame: str = FRAME_REFERENCE
     sensor_frame: str = FRAME_OS_SENSOR

@@ -35,6 +35,8 @@ class GlobalSpeedPlan:
         config: the same limits as the local speed profile.
 
     Attributes:
+        points: (k, 2) the path's points in ``reference`` [m] (a loop's first
+            point repeated at its end).
         stations: (k,) arc length of the path's points [m].
         speeds: (k,) allowed speed there [m/s].
         curvature: (k,) the path's curvature averaged over
@@ -53,10 +55,12 @@ class GlobalSpeedPlan:
             v = speed_profile(laps, free)
             n = len(pts)
             k = _curvature(laps, config.curvature_window)
+            self.points: FloatArray = ring
             self.stations: FloatArray = stations
             self.speeds: FloatArray = np.append(v[n : 2 * n], v[n])
             self.curvature: FloatArray = np.append(k[n : 2 * n], k[n])
         else:
+            self.points = pts
             self.stations = arc_length(pts)
             self.length = float(self.stations[-1])
             self.speeds = speed_profile(pts, dataclasses.replace(config, horizon_stop=True))
@@ -75,6 +79,15 @@ class GlobalSpeedPlan:
     def curvature_at(self, stations: FloatArray) -> FloatArray:
         """Curvature (n,) [1/m] at arc lengths ``stations`` (n,) [m]."""
         return np.interp(self._wrap(stations), self.stations, self.curvature)
+
+    def points_at(self, stations: FloatArray) -> FloatArray:
+        """Points (n, 2) [m] in ``reference`` at arc lengths ``stations`` (n,) [m]
+        (a loop's wrap around; an open path's end holds beyond it)."""
+        st = self._wrap(stations)
+        return np.column_stack(
+            [np.interp(st, self.stations, self.points[:, 0]),
+             np.interp(st, self.stations, self.points[:, 1])]
+        )  # fmt: skip
 
     def _wrap(self, stations: FloatArray) -> FloatArray:
         st = np.asarray(stations, dtype=float)

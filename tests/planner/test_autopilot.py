@@ -209,3 +209,55 @@ def test_no_frame_tree_skips_the_detection(straight) -> None:
     det = ConeDetections(Header(1.0, "os_sensor"), np.zeros((1, 3)))
     assert autopilot.on_detections(det) is None
     assert autopilot.skipped_count == 1
+
+
+def test_pursuit_continues_along_the_global_path_beyond_a_short_path(
+    synth: ModuleType, circle
+) -> None:
+    """On the R 15 m circle at 15 m/s (lookahead 2 + 0.4 * 15 = 8 m, under the
+    radius cap of 15 m), cones seen to 9 m give a path that ends inside the
+    lookahead circle (6.4 m from the rear axle, the cones placed 5 m apart
+    as they fall at 15 deg round the circle): the target is then on the
+    global path (the centreline), 8 m from the rear axle, and the steering
+    the circle's geometric angle; without the continuation it is the path's
+    last point, nearer."""
+    pose = synth.pose_on(circle, 30)
+    scene = synth.make_scene(circle, pose, max_range=9.0)
+    speed = WheelSpeed(Header(scene.stamp, "gps_antenna"), 15.0, 0.01)
+    steered = {}
+    for beyond in (True, False):
+        autopilot = Autopilot(
+            scene.buffer, circle.global_path, AutopilotConfig(pursue_global_beyond_path=beyond)
+        )
+        autopilot.on_wheel_speed(speed)
+        assert autopilot.on_detections(scene.detections).status is PlanStatus.OK
+        command = autopilot.control(scene.stamp)
+        path = autopilot.path_now
+        axle_x = autopilot.config.pure_pursuit.rear_axle_x
+        end_distance = math.hypot(path[-1, 0] - axle_x, path[-1, 1])
+        assert end_distance < 7.0  # the cone path ends well inside the circle
+        target = autopilot.lookahead_point
+        distance = math.hypot(target[0] - axle_x, target[1])
+        if beyond:
+            assert len(autopilot.pursuit_path) > len(path)
+            assert distance == pytest.approx(8.0, abs=1e-6)
+            on_map = pose.transform_points(target[None])[0]
+            assert math.hypot(*on_map) == pytest.approx(15.0, abs=0.02)  # on the centreline
+        else:
+            assert np.array_equal(autopilot.pursuit_path, path)
+            assert_allclose(target, path[-1])
+            assert distance == pytest.approx(end_distance)
+        steered[beyond] = command.steering
+    # The rear axle is on the circle too: the geometric angle for a chord of
+    # 8 m in R 15 m is atan(L / R) (slip-corrected a little more).
+    assert steered[True] == pytest.approx(math.atan(WHEELBASE / 15.0), rel=0.15)
+
+
+def test_a_path_reaching_past_the_lookahead_is_pursued_as_it_is(synth: ModuleType, circle) -> None:
+    """Cones seen to 20 m: the path reaches beyond 8 m, nothing is added."""
+    scene = synth.make_scene(circle, synth.pose_on(circle, 0), max_range=20.0)
+    autopilot = Autopilot(scene.buffer, circle.global_path)
+    autopilot.on_wheel_speed(WheelSpeed(Header(scene.stamp, "gps_antenna"), 15.0, 0.01))
+    autopilot.on_detections(scene.detections)
+    autopilot.control(scene.stamp)
+    assert np.array_equal(autopilot.pursuit_path, autopilot.path_now)

@@ -55,3 +55,26 @@ def test_speeds_at_wraps_a_closed_path() -> None:
     expected = [plan.speed_at(s) for s in stations]
     assert_allclose(plan.speeds_at(stations), expected, rtol=1e-12)
     assert plan.speeds_at(stations)[1] == plan.speeds_at(stations)[3]
+
+
+def test_points_at_wraps_a_loop_and_holds_an_open_end() -> None:
+    """On a circle of R 20 m (720 points) a station s is the point at angle
+    s / R (of the polygon's arc length), within 1 mm: a point on a chord lies
+    up to R (1 - cos(pi / 720)) = 0.19 mm inside the circle and a little off
+    its angle; the same point one lap on; an open straight holds its end."""
+    a = np.arange(720) * 2.0 * math.pi / 720
+    loop = GlobalSpeedPlan(
+        global_path_from_centreline(20.0 * np.column_stack([np.cos(a), np.sin(a)]), closed=True),
+        SpeedProfileConfig(),
+    )
+    s = np.array([0.0, 10.0, 31.4, 100.0])
+    pts = loop.points_at(s)
+    angle = s * loop.length / (2.0 * math.pi * 20.0) / 20.0  # arc length of the polygon
+    assert_allclose(pts, 20.0 * np.column_stack([np.cos(angle), np.sin(angle)]), atol=1e-3)
+    assert_allclose(loop.points_at(s + loop.length), pts, atol=1e-9)
+    x = np.arange(0.0, 50.5, 0.5)
+    lane = GlobalSpeedPlan(
+        global_path_from_centreline(np.column_stack([x, np.zeros_like(x)]), closed=False),
+        SpeedProfileConfig(),
+    )
+    assert_allclose(lane.points_at(np.array([12.25, 50.0, 60.0])), [[12.25, 0], [50, 0], [50, 0]])
