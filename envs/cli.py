@@ -30,7 +30,7 @@ import sys
 import tempfile
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import TextIO
+from typing import Any, TextIO
 
 from envs.run_plot import save_run_picture
 from envs.runner import RunResult, run_scenario
@@ -40,6 +40,7 @@ from localization.geodesy import GeodesyError
 from localization.global_path import (
     GlobalPath,
     GlobalPathError,
+    global_path_findings,
     global_path_for_track,
 )
 from sim.sensors import PROFILES as SENSOR_PROFILES
@@ -172,8 +173,8 @@ def cmd_track_show(name: str, out: str) -> int:
 def cmd_track_check(name: str, as_json: bool) -> int:
     """Validate a track; exit 0 when it has no errors."""
     track = _load_track(name, "track")
-    global_path_for_track(track)  # a malformed global path CSV is bad input too
-    report = check_report(track)
+    # A malformed global path CSV is bad input too (exit 2).
+    report = _track_report(track, global_path_for_track(track))
     if as_json:
         print(json.dumps(report))
     else:
@@ -187,6 +188,16 @@ def cmd_track_check(name: str, as_json: bool) -> int:
         if not report["warnings"] and not report["errors"]:
             print("ok: no warnings, no errors")
     return EXIT_FAILED if report["errors"] else EXIT_OK
+
+
+def _track_report(track: Track, global_path: GlobalPath) -> dict[str, Any]:
+    """The validator's report (``check_report``) with the global path's
+    findings against the track added (``global_path_findings``)."""
+    report = check_report(track)
+    warnings, errors = global_path_findings(track, global_path)
+    report["warnings"] += warnings
+    report["errors"] += errors
+    return report
 
 
 MAX_LAPS = 100
@@ -209,7 +220,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise CliError("--out: empty directory name; give the output directory")
     track = _load_track(args.track, "--track")
     global_path = global_path_for_track(track)
-    errors = check_report(track)["errors"]
+    errors = _track_report(track, global_path)["errors"]
     if errors:
         raise CliError("\n".join(f"{args.track}: {error}" for error in errors))
     out = Path(args.out)

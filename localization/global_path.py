@@ -15,10 +15,10 @@ import os
 import uuid
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import cKDTree
 
 from localization.geodesy import (
     DEFAULT_ORIGIN,
@@ -26,9 +26,7 @@ from localization.geodesy import (
     gps_to_local_cartesian,
     local_cartesian_to_gps,
 )
-
-if TYPE_CHECKING:
-    from tracks import Track
+from tracks import Track, TrackFormatError
 
 COV_THRESHOLD_M2 = 0.0025  # [m^2] seed: "error > threshold, e.g. >5 cm if threshold=0.0025"
 DERIVED_PATH_COV_M2 = 0.0004  # [m^2] a path surveyed from the cones: 2 cm sigma
@@ -272,3 +270,61 @@ def global_path_for_track(track: Track, origin: ReferenceOrigin = DEFAULT_ORIGIN
     if track.global_path_file is not None:
         return read_global_path_csv(track.global_path_file, origin, closed=closed)
     return global_path_from_centreline(track.centreline, closed=closed, origin=origin)
+
+
+OFF_TRACK_MARGIN_M = 1.0  # [m] beyond half the track's widest width
+FIT_FRACTION = 0.1  # more than this share off (or uncovered) is an error
+
+
+def global_path_findings(track: Track, path: GlobalPath) -> tuple[list[str], list[str]]:
+    """(warnings, errors) of a global path against its track's centreline.
+
+    A point of the path is off the track when it lies farther from the
+    centreline than half the track's widest width plus ``OFF_TRACK_MARGIN_M``
+    (a surveyed line may run anywhere between the boundaries); a centreline
+    point is uncovered when the path is that far from it. Some points off
+    (a bad fix) is a warning; more than ``FIT_FRACTION`` of them off, or of
+    the centreline uncovered, is an error: the car would follow, classify
+    its cones by and take its speeds from a path that is not this track's
+    (a wrong origin, another track's file).
+
+    A track whose geometry cannot be derived gives no findings here (the
+    track validator reports it).
+    """
+    try:
+        centre = np.asarray(track.centreline, dtype=float)
+        limit = 0.5 * float(np.max(track.widths)) + OFF_TRACK_MARGIN_M
+    except TrackFormatError:
+        return [], []
+    path_name = "global path"
+    if track.global_path_file is not None:
+        path_name = f"global path {track.global_path_file.name}"
+    off_d, _ = cKDTree(_densified(centre, track.layout == "closed")).query(path.xy)
+    covered, _ = cKDTree(_densified(path.xy, path.closed)).query(centre)
+    warnings: list[str] = []
+    errors: list[str] = []
+    off = off_d > limit
+    if off.any():
+        i = int(np.argmax(off_d))
+        x, y = path.xy[i]
+        text = (
+            f"{path_name}: {int(off.sum())} of {len(off)} points lie more than {limit:.1f} m "
+            f"from the track's centreline (up to {off_d[i]:.1f} m, at ({x:.1f}, {y:.1f}))"
+        )
+        (errors if off.mean() > FIT_FRACTION else warnings).append(text)
+    uncovered = covered > limit
+    if uncovered.mean() > FIT_FRACTION:
+        errors.append(
+            f"{path_name} does not follow the track: {100.0 * uncovered.mean():.0f} % of its "
+            f"centreline is more than {limit:.1f} m from the path"
+        )
+    return warnings, errors
+
+
+def _densified(points: FloatArray, closed: bool, spacing: float = 0.25) -> FloatArray:
+    """The polyline (n, 2) with points at most ``spacing`` [m] apart (closed: the loop)."""
+    pts = np.vstack([points, points[:1]]) if closed else np.asarray(points, dtype=float)
+    seg = np.hypot(*np.diff(pts, axis=0).T)
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    fine = np.linspace(0.0, s[-1], max(2, math.ceil(s[-1] / spacing) + 1))
+    return np.column_stack([np.interp(fine, s, pts[:, 0]), np.interp(fine, s, pts[:, 1])])

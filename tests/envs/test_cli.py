@@ -217,6 +217,27 @@ def test_track_check_reports_a_broken_global_path(
     assert code == 2 and "t_path.csv:1" in err and "abc" in err
 
 
+def test_a_global_path_of_another_place_is_an_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """trackdrive with a global path 10,000 km away: `track check` reports
+    it (exit 1), `run` refuses it (exit 2) and writes nothing."""
+    track_file = tmp_path / "t.yaml"
+    (tmp_path / "t_path.csv").write_text("-89.0,179.9,0.0001\n-89.0,179.91,0.0001\n")
+    text = (Path(load_track("trackdrive").source or "")).read_text()
+    track_file.write_text(
+        "\n".join(
+            "global_path: t_path.csv" if line.startswith("global_path:") else line
+            for line in text.splitlines()
+        )
+    )
+    code, out, _ = run_cli(["track", "check", str(track_file)], capsys)
+    assert code == 1 and "error: global path t_path.csv: 2 of 2 points lie" in out
+    out_dir = tmp_path / "out"
+    code, out, err = run_cli(["run", "--track", str(track_file), "--out", str(out_dir)], capsys)
+    assert code == 2 and "does not follow the track" in err and not out_dir.exists()
+
+
 def assert_bad_input(
     code: int, out: str, err: str, *must_contain: str, lines: int | None = 1
 ) -> list[str]:

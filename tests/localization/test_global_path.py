@@ -16,6 +16,8 @@ from localization.geodesy import DEFAULT_ORIGIN, local_cartesian_to_gps
 from localization.global_path import (
     COV_THRESHOLD_M2,
     GlobalPathError,
+    global_path_findings,
+    global_path_for_track,
     global_path_from_centreline,
     read_global_path_csv,
     write_global_path_csv,
@@ -130,3 +132,25 @@ def test_written_file_has_ordinary_permissions(tmp_path: Path) -> None:
     finally:
         os.umask(old)
     assert (tmp_path / "p.csv").stat().st_mode & 0o777 == 0o644
+
+
+def test_findings_against_the_track() -> None:
+    """trackdrive's own path fits it; moved 10 m (more than half its widest
+    width plus 1 m) it is an error, the car would follow another line; one
+    point 20 m off (a bad fix) is a warning naming it."""
+    from tracks import load_track
+
+    track = load_track("trackdrive")
+    path = global_path_for_track(track)
+    assert global_path_findings(track, path) == ([], [])
+    limit = 0.5 * float(np.max(track.widths)) + 1.0
+    moved = global_path_from_centreline(path.xy + np.array([10.0, 0.0]), closed=True)
+    warnings, errors = global_path_findings(track, moved)
+    assert any(f"points lie more than {limit:.1f} m" in e for e in errors)
+    assert any("does not follow the track" in e for e in errors)
+    xy = path.xy.copy()
+    xy[40] += [0.0, 20.0]
+    warnings, errors = global_path_findings(track, global_path_from_centreline(xy, closed=True))
+    x, y = xy[40]
+    assert errors == [] and len(warnings) == 1
+    assert f"1 of {len(xy)} points" in warnings[0] and f"({x:.1f}, {y:.1f})" in warnings[0]
