@@ -125,7 +125,13 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         start_pose = _start_pose_option(options.get("start_pose"))
         episode_seed = int(self.np_random.integers(0, 2**31 - 1))
         # Build first: a bad option leaves the env as it was.
-        self.stack = self._build_stack(episode_seed, track, sensors, localization, start_pose)
+        stack = self._build_stack(episode_seed, track, sensors, localization, start_pose)
+        if start_pose is not None and stack.world.race.is_off_track_at(start_pose):
+            raise ValueError(
+                f"reset option start_pose {options['start_pose']!r} puts the car off the "
+                f"track {stack.track.name!r}"
+            )
+        self.stack = stack
         self.overlay = None  # a policy attaches its own after reset
         if self._renderer is not None:
             self._renderer.global_path = self.stack.global_path

@@ -174,9 +174,20 @@ class RaceControl:
         p0x, p0y = xy_prev
         if (p1x - p0x) * tx + (p1y - p0y) * ty > 0.0:
             self._crossed(t_prev, t, (p0x, p0y), (p1x, p1y))
-        # Off track: the lateral offset of each footprint corner is the car's
-        # own plus the corner's offset (rotated into the world) on the
-        # track's left normal (-ty, tx).
+        self._set_off_track(t, self._off(lateral, index, tx, ty, yaw))
+        self._check_stuck(t)
+
+    def is_off_track_at(self, pose: Pose2D) -> bool:
+        """Whether the car with its CG at ``pose`` is off the track (all four
+        footprint corners beyond one boundary), without recording anything."""
+        _, lateral, index, tx, ty = self.progress.project_xy(pose.x, pose.y)
+        return self._off(lateral, index, tx, ty, pose.yaw)
+
+    def _off(self, lateral: float, index: int, tx: float, ty: float, yaw: float) -> bool:
+        """Off track, from the CG's lateral offset at centreline ``index``
+        with tangent (tx, ty): each footprint corner's offset is the CG's plus
+        the corner's (rotated into the world) on the track's left normal
+        (-ty, tx)."""
         c, sn = math.cos(yaw), math.sin(yaw)
         nx, ny = -ty, tx
         halves = self._half_widths_list
@@ -186,8 +197,7 @@ class RaceControl:
             lat = lateral + (c * cx - sn * cy) * nx + (sn * cx + c * cy) * ny
             above += lat > half
             below += lat < -half
-        self._set_off_track(t, above == 4 or below == 4)
-        self._check_stuck(t)
+        return above == 4 or below == 4
 
     def _advance_progress(self, s: float) -> None:
         assert self._s_last is not None, "RaceControl.start() must be called first"

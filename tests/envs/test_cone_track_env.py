@@ -270,8 +270,13 @@ def test_config_types_numpy_integers_yes_bools_and_strings_no() -> None:
             EnvConfig.from_dict({key: value})
 
 
-@pytest.mark.parametrize("start", [(0.0, 0.0), "abc", "123", (0.0, math.nan, 0.0), 5])
+@pytest.mark.parametrize(
+    "start", [(0.0, 0.0), "abc", "123", (0.0, math.nan, 0.0), 5, (0.0, 30.0, 0.0)]
+)
 def test_bad_start_pose_option_is_named(start: object) -> None:
+    """Not three finite numbers, or off the track (trackdrive, 30 m north of
+    the start line: the infield): refused, naming the option; the env keeps
+    its episode."""
     env = ConeTrackEnv()
     env.reset(seed=0)
     before = env.stack
