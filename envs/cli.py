@@ -292,6 +292,15 @@ def _check_render_extra() -> None:
         raise CliError(
             '--render needs pygame: install the render extra, pip install "conesim[render]"'
         ) from None
+    # On Linux without a display pygame falls back to a driver that shows
+    # nothing: the run would be slow (drawing every frame) and silent.
+    if (
+        sys.platform.startswith("linux")
+        and not os.environ.get("DISPLAY")
+        and not os.environ.get("WAYLAND_DISPLAY")
+        and os.environ.get("SDL_VIDEODRIVER", "") not in {"dummy", "offscreen"}
+    ):
+        raise CliError("--render needs a display (DISPLAY or WAYLAND_DISPLAY is not set)")
 
 
 def _write_outputs(

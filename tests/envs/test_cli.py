@@ -200,6 +200,20 @@ def test_run_render_without_pygame(
     assert code == 2 and "conesim[render]" in err
 
 
+def test_run_render_without_a_display(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    """--render on Linux with no display would draw into nothing, slowly:
+    exit 2 before simulating, nothing written."""
+    pytest.importorskip("pygame")
+    monkeypatch.setattr("sys.platform", "linux")
+    for name in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER"):
+        monkeypatch.delenv(name, raising=False)
+    out = tmp_path / "out"
+    code, _, err = run_cli(["run", "--render", "--out", str(out)], capsys)
+    assert code == 2 and "--render needs a display" in err and not out.exists()
+
+
 def test_track_check_reports_a_broken_global_path(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
