@@ -291,8 +291,8 @@ class Autopilot:
             acceleration = self.speed_controller.step(0.0, speed, dt)
             self.command = ControlCommand(t, 0.0, acceleration)
             return self.command
-        cap = self._lookahead_cap(path, speed)
-        self.pursuit_path = self._pursuit_path(path, speed, cap)
+        self.pursuit_path, curvature = self._pursuit_path(path, speed)
+        cap = self._lookahead_cap(self.pursuit_path, curvature, speed)
         self.steering = pure_pursuit(self.pursuit_path, speed, c.pure_pursuit, cap)
         axle = np.array([c.pure_pursuit.rear_axle_x, 0.0])
         v_ref, a_ff = target_on_path(path, self.plan.speeds, axle, speed, c.speed_control)
@@ -302,64 +302,67 @@ class Autopilot:
         self.command = ControlCommand(t, self.steering.steering, acceleration)
         return self.command
 
-    def _lookahead_cap(self, path: FloatArray, speed: float) -> float | None:
+    def _lookahead_cap(self, path: FloatArray, curvature: FloatArray, speed: float) -> float | None:
         """``lookahead_radius_ratio`` times the tightest radius within the lookahead [m].
 
-        The radius is the global path's at the waypoints (``path_curvature``,
-        with ``speed_source = "global"``) from the one nearest the rear axle
-        to one lookahead distance on. A lookahead longer than the radius aims
-        across the inside of a hairpin: the chord of L_d in a circle of R
-        lies R - sqrt(R^2 - L_d^2 / 4) inside it, 0.96 m for 4.9 m in 3.5 m
-        but 0.47 m for L_d = R.
+        The radius is the global path's at the points of the pursued path
+        (``curvature``: ``path_curvature`` at the waypoints, with
+        ``speed_source = "global"``, and the global path's own beyond them)
+        from the one nearest the rear axle to one lookahead distance on. A
+        lookahead longer than the radius aims across the inside of a hairpin:
+        the chord of L_d in a circle of R lies R - sqrt(R^2 - L_d^2 / 4)
+        inside it, 0.96 m for 4.9 m in 3.5 m but 0.47 m for L_d = R.
         """
         pp = self.config.pure_pursuit
-        if len(self.path_curvature) != len(path) or len(path) < 2:
+        if len(curvature) != len(path) or len(path) < 2:
             return None
         axle = np.array([pp.rear_axle_x, 0.0])
         s = arc_length(path)
         nearest = int(np.argmin(np.hypot(path[:, 0] - axle[0], path[:, 1] - axle[1])))
         ahead = (s >= s[nearest]) & (s <= s[nearest] + lookahead_distance(speed, pp))
-        kappa = float(np.max(np.abs(self.path_curvature[ahead])))
+        kappa = float(np.max(np.abs(curvature[ahead])))
         return pp.lookahead_radius_ratio / kappa if kappa > 0.0 else None
 
-    def _pursuit_path(self, path: FloatArray, speed: float, cap: float | None) -> FloatArray:
-        """The path pure pursuit follows, ``os_sensor`` [m]: the local path, and
-        when it ends inside the lookahead circle (``pursue_global_beyond_path``),
-        the global path from the station of its end to one lookahead distance
-        (plus 2 m) beyond, every 0.5 m.
+    def _pursuit_path(self, path: FloatArray, speed: float) -> tuple[FloatArray, FloatArray]:
+        """The path pure pursuit follows, ``os_sensor`` [m], and the global
+        path's curvature at its points [1/m] (for the lookahead cap; empty
+        without ``speed_source = "global"``).
 
-        The end's station is looked for from 5 m behind the sensor's station
-        at the plan to the planner's range ahead of it, so that the skidpad's
-        crossing does not put it on the other circle.
+        The local path, and when it ends inside the lookahead circle
+        (``pursue_global_beyond_path``; the lookahead before its cap, which is
+        then taken over both), the global path from the station of its end
+        to 1.5 m beyond one lookahead distance, every 0.5 m. The end's
+        station is looked for from 5 m behind the sensor's station at the
+        plan to the planner's range (``midline.max_range``, 30 m) ahead of
+        it: the skidpad's other circle, about 57 m round, lies outside.
         """
         c = self.config
         pp = c.pure_pursuit
         gs = self.global_speed
         hint = self.station_hint
+        curvature = self.path_curvature
         if not c.pursue_global_beyond_path or gs is None or hint is None:
-            return path
-        if len(self.path_reference) == 0:
-            return path
+            return path, curvature
         look = lookahead_distance(speed, pp)
-        if cap is not None:
-            look = max(min(look, cap), pp.lookahead_min)
         end_x, end_y = float(path[-1, 0]), float(path[-1, 1])
         if math.hypot(end_x - pp.rear_axle_x, end_y) >= look:
-            return path
+            return path, curvature
         window = (hint - 5.0, hint + c.midline.max_range)
         end = self.projector.project(self.path_reference[-1:], window=window)
         stations = float(end.station[0]) + np.arange(0.5, look + 2.0, 0.5)
         if not gs.closed:
             stations = stations[stations <= gs.length]
             if len(stations) == 0:
-                return path
+                return path, curvature
         try:
             beyond = self.buffer.transform_points(
                 c.sensor_frame, c.reference_frame, gs.points_at(stations), LATEST
             )
         except TransformError:
-            return path
-        return np.vstack([path, beyond])
+            return path, curvature
+        if len(curvature) == len(path):
+            curvature = np.concatenate([curvature, gs.curvature_at(stations)])
+        return np.vstack([path, beyond]), curvature
 
     def _path_in_sensor_frame(self) -> FloatArray:
         """The plan's path in the latest ``os_sensor`` frame (the planned one if that fails)."""

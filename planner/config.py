@@ -419,7 +419,12 @@ class AutopilotConfig(Settings):
             into the trackdrive's S-bend late and left the track in 9 of 60
             seeds (0-59, ``benchmarks/bench_laps.py``); pursuing the global
             path beyond the end, in none, at the same lap times. The steering
-            still follows the cones wherever they reach that far.
+            still follows the cones wherever they reach that far; beyond
+            them it follows the global path as the pose places it (with the
+            seed's raw pose, 150 ms late, up to 0.7 m off the cone path's
+            end). Needs ``global_speed`` (the global path's stations and
+            curvature; the lookahead cap reads the curvature beyond the
+            cones too).
         speed_window: span of the frame-tree speed estimate used when no wheel
             speed has arrived [s].
         reference_frame: the world frame (a vehicle prefix is allowed).

@@ -8,6 +8,7 @@ after capture, wheel speed at 50 Hz.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from types import ModuleType
@@ -239,7 +240,7 @@ def test_pursuit_continues_along_the_global_path_beyond_a_short_path(
         target = autopilot.lookahead_point
         distance = math.hypot(target[0] - axle_x, target[1])
         if beyond:
-            assert len(autopilot.pursuit_path) > len(path)
+            assert_extension_continues(autopilot, path, radius=15.0, pose=pose)
             assert distance == pytest.approx(8.0, abs=1e-6)
             on_map = pose.transform_points(target[None])[0]
             assert math.hypot(*on_map) == pytest.approx(15.0, abs=0.02)  # on the centreline
@@ -261,3 +262,79 @@ def test_a_path_reaching_past_the_lookahead_is_pursued_as_it_is(synth: ModuleTyp
     autopilot.on_detections(scene.detections)
     autopilot.control(scene.stamp)
     assert np.array_equal(autopilot.pursuit_path, autopilot.path_now)
+
+
+def assert_extension_continues(
+    autopilot: Autopilot, path: np.ndarray, radius: float, pose: Pose2D
+) -> np.ndarray:
+    """The global points added to ``path`` start 0.5 m past its end along the
+    circle of ``radius`` about the origin and follow it every 0.5 m (chords
+    of 0.5 m); returns them in ``reference``."""
+    added = autopilot.pursuit_path[len(path) :]
+    assert len(added) > 0 and np.array_equal(autopilot.pursuit_path[: len(path)], path)
+    gap = math.hypot(*(added[0] - path[-1]))
+    assert gap == pytest.approx(0.5, abs=0.05)  # the cone path's end is on the centreline
+    steps = np.hypot(*np.diff(added, axis=0).T)
+    assert_allclose(steps, 0.5, atol=1e-3)
+    on_map = pose.transform_points(added)
+    assert_allclose(np.hypot(on_map[:, 0], on_map[:, 1]), radius, atol=0.01)
+    return on_map
+
+
+def test_pursuit_continuation_wraps_round_a_loop(synth: ModuleType, circle) -> None:
+    """Near the end of the loop's stations (the car at 315 deg, the cone path
+    to about 343 deg) the global points run on past station 0 (360 deg)
+    without a jump."""
+    pose = synth.pose_on(circle, 630)
+    scene = synth.make_scene(circle, pose, max_range=9.0)
+    autopilot = Autopilot(scene.buffer, circle.global_path)
+    autopilot.on_wheel_speed(WheelSpeed(Header(scene.stamp, "gps_antenna"), 15.0, 0.01))
+    assert autopilot.on_detections(scene.detections).status is PlanStatus.OK
+    autopilot.control(scene.stamp)
+    on_map = assert_extension_continues(autopilot, autopilot.path_now, 15.0, pose)
+    angles = np.unwrap(np.arctan2(on_map[:, 1], on_map[:, 0]))
+    assert angles[0] < 0.0 < angles[-1]  # atan2: from -17 deg to +17 deg
+
+
+def test_pursuit_continuation_stops_at_an_open_path_s_end(synth: ModuleType, straight) -> None:
+    """An open lane ending at x = 70 m, the car at 64 m at 15 m/s: the cone
+    path reaches the end, 6.5 m from the rear axle, inside the 8 m
+    lookahead, and the global path has nothing beyond it to add."""
+    pose = Pose2D(64.0, 0.0, 0.0)
+    scene = synth.make_scene(straight, pose, max_range=20.0)
+    autopilot = Autopilot(scene.buffer, straight.global_path)
+    autopilot.on_wheel_speed(WheelSpeed(Header(scene.stamp, "gps_antenna"), 15.0, 0.01))
+    autopilot.on_detections(scene.detections)
+    autopilot.control(scene.stamp)
+    on_map = pose.transform_points(autopilot.pursuit_path)
+    assert on_map[:, 0].max() == pytest.approx(70.0, abs=1e-6)
+    assert np.array_equal(autopilot.pursuit_path, autopilot.path_now)
+    assert autopilot.steering.distance < autopilot.steering.lookahead == pytest.approx(8.0)
+
+
+def test_lookahead_cap_reads_the_corner_beyond_the_cones(synth: ModuleType, hairpin) -> None:
+    """The cone path stops 2 m before the R 3.5 m hairpin's turn, the car 6 m
+    before it at 12 m/s (lookahead 2 + 0.4 * 12 = 6.8 m, into the turn):
+    with the global points beyond the cones the cap sees the turn and holds
+    the lookahead to its radius, so the target is on the entry leg, not
+    across the turn's inside; without them no cap applies."""
+    centre = hairpin.centre
+    pose = synth.pose_on(hairpin, int(np.argmin(np.hypot(centre[:, 0] + 6.0, centre[:, 1]))))
+    scene = synth.make_scene(hairpin, pose, max_range=20.0)
+    for beyond in (True, False):
+        config = AutopilotConfig(pursue_global_beyond_path=beyond)
+        autopilot = Autopilot(scene.buffer, hairpin.global_path, config)
+        autopilot.on_wheel_speed(WheelSpeed(Header(scene.stamp, "gps_antenna"), 12.0, 0.01))
+        plan = autopilot.on_detections(scene.detections)
+        keep = int(np.argmin(pose.transform_points(plan.path)[:, 0] < -2.0))
+        assert keep >= 2
+        autopilot.plan = dataclasses.replace(plan, path=plan.path[:keep], speeds=plan.speeds[:keep])
+        autopilot.path_reference = autopilot.path_reference[:keep]
+        autopilot.path_curvature = autopilot.path_curvature[:keep]
+        autopilot.control(scene.stamp)
+        target = pose.transform_points(autopilot.lookahead_point[None])[0]
+        if beyond:
+            assert autopilot.steering.lookahead == pytest.approx(3.5, rel=0.02)
+            assert -3.5 < target[0] < -2.0 and abs(target[1]) < 0.1  # on the entry leg
+        else:
+            assert autopilot.steering.lookahead == pytest.approx(6.8)

@@ -69,7 +69,7 @@ def test_points_at_wraps_a_loop_and_holds_an_open_end() -> None:
     )
     s = np.array([0.0, 10.0, 31.4, 100.0])
     pts = loop.points_at(s)
-    angle = s * loop.length / (2.0 * math.pi * 20.0) / 20.0  # arc length of the polygon
+    angle = 2.0 * math.pi * s / loop.length  # a share of the polygon's perimeter
     assert_allclose(pts, 20.0 * np.column_stack([np.cos(angle), np.sin(angle)]), atol=1e-3)
     assert_allclose(loop.points_at(s + loop.length), pts, atol=1e-9)
     x = np.arange(0.0, 50.5, 0.5)
