@@ -214,12 +214,10 @@ def test_run_render_without_a_display(
     assert code == 2 and "--render needs a display" in err and not out.exists()
 
 
-def test_track_check_reports_a_broken_global_path(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    """A track whose lat,lon,cov CSV is malformed is bad input for `track check` too."""
+def trackdrive_with_global_path(tmp_path: Path, csv: str) -> Path:
+    """trackdrive's conesim YAML in ``tmp_path`` with its global path replaced by ``csv``."""
     track_file = tmp_path / "t.yaml"
-    (tmp_path / "t_path.csv").write_text("37.5,abc,0.1\n37.6,127.0,0.1\n")
+    (tmp_path / "t_path.csv").write_text(csv)
     text = (Path(load_track("trackdrive").source or "")).read_text()
     track_file.write_text(
         "\n".join(
@@ -227,6 +225,14 @@ def test_track_check_reports_a_broken_global_path(
             for line in text.splitlines()
         )
     )
+    return track_file
+
+
+def test_track_check_reports_a_broken_global_path(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A track whose lat,lon,cov CSV is malformed is bad input for `track check` too."""
+    track_file = trackdrive_with_global_path(tmp_path, "37.5,abc,0.1\n37.6,127.0,0.1\n")
     code, _, err = run_cli(["track", "check", str(track_file)], capsys)
     assert code == 2 and "t_path.csv:1" in err and "abc" in err
 
@@ -236,15 +242,7 @@ def test_a_global_path_of_another_place_is_an_error(
 ) -> None:
     """trackdrive with a global path 10,000 km away: `track check` reports
     it (exit 1), `run` refuses it (exit 2) and writes nothing."""
-    track_file = tmp_path / "t.yaml"
-    (tmp_path / "t_path.csv").write_text("-89.0,179.9,0.0001\n-89.0,179.91,0.0001\n")
-    text = (Path(load_track("trackdrive").source or "")).read_text()
-    track_file.write_text(
-        "\n".join(
-            "global_path: t_path.csv" if line.startswith("global_path:") else line
-            for line in text.splitlines()
-        )
-    )
+    track_file = trackdrive_with_global_path(tmp_path, "-89.0,179.9,0.0001\n-89.0,179.91,0.0001\n")
     code, out, _ = run_cli(["track", "check", str(track_file)], capsys)
     assert code == 1 and "error: global path t_path.csv: 2 of 2 points lie" in out
     out_dir = tmp_path / "out"
