@@ -2,14 +2,14 @@
 
 The CI lap tests (``tests/envs/test_laps.py``) run 3 seeds per track; this
 runs ``--seeds`` (default 20) per track with the same settings (rtk sensors,
-fused localization, 2 laps) and prints, per track, how many runs were clean
+fused localization by default, 2 laps) and prints, per track, how many runs were clean
 (all laps completed, no cone down or out, no off-track event), the seeds of
 the others and what happened, and the best-lap ratio against the
 friction-limited lap (mean and worst over the clean runs).
 
 Run: ``.venv/bin/python benchmarks/bench_laps.py [--seeds N] [--first S]
-[--tracks a,b] [--jobs J]`` (J worker processes, default 2; about 3 s of wall
-time per run on one core of the reference machine).
+[--tracks a,b] [--jobs J] [--localization fused|raw|truth]`` (J worker
+processes, default 2; about 3 s of wall time per run on one core).
 """
 
 from __future__ import annotations
@@ -23,10 +23,10 @@ from envs.runner import run_scenario
 from tracks import shipped_tracks
 
 
-def one_run(job: tuple[str, int]) -> tuple[str, int, bool, str, int, int, float | None]:
+def one_run(job: tuple[str, int, str]) -> tuple[str, int, bool, str, int, int, float | None]:
     """(track, seed, clean, end reason, DOO cones, off-track events, lap ratio) of one run."""
-    track, seed = job
-    r = run_scenario(track, laps=2, seed=seed)
+    track, seed, localization = job
+    r = run_scenario(track, laps=2, seed=seed, localization=localization)
     clean = r.finished and r.cones_down_or_out == 0 and r.off_track_events == 0
     return (
         track, seed, clean, r.end_reason, r.cones_down_or_out, r.off_track_events,
@@ -41,13 +41,15 @@ def main() -> None:
     parser.add_argument("--first", type=int, default=0, help="first seed")
     parser.add_argument("--tracks", default=",".join(shipped_tracks()))
     parser.add_argument("--jobs", type=int, default=2, help="worker processes")
+    parser.add_argument("--localization", default="fused", choices=("fused", "raw", "truth"))
     args = parser.parse_args()
     tracks = [t.strip() for t in args.tracks.split(",") if t.strip()]
-    jobs = [(t, s) for t in tracks for s in range(args.first, args.first + args.seeds)]
+    seeds = range(args.first, args.first + args.seeds)
+    jobs = [(t, s, args.localization) for t in tracks for s in seeds]
     with ProcessPoolExecutor(max(1, args.jobs)) as pool:
         results = list(pool.map(one_run, jobs))
     print(
-        f"lap completion, rtk sensors, fused localization, 2 laps, seeds "
+        f"lap completion, rtk sensors, {args.localization} localization, 2 laps, seeds "
         f"{args.first}-{args.first + args.seeds - 1}"
     )
     print(f"  {'track':12s}  clean  best lap / limit (clean runs)  not clean")
