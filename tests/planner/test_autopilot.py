@@ -338,3 +338,48 @@ def test_lookahead_cap_reads_the_corner_beyond_the_cones(synth: ModuleType, hair
             assert -3.5 < target[0] < -2.0 and abs(target[1]) < 0.1  # on the entry leg
         else:
             assert autopilot.steering.lookahead == pytest.approx(6.8)
+
+
+def test_pursuit_continuation_takes_the_right_circle_at_a_figure_of_eight(
+    synth: ModuleType,
+) -> None:
+    """A skidpad-like eight: circle A (centre (0, R)) counter-clockwise, then
+    circle B (centre (0, -R)) clockwise, both leaving the origin along +x.
+    A cone path ending at the origin is equally near both stations there;
+    the station window about the sensor's station picks the one ahead: at
+    the end of A the global points go on round B (y < 0), at the end of B
+    round A (y > 0)."""
+    from localization.global_path import global_path_from_centreline
+
+    radius = 9.125  # [m] the skidpad's centre line
+    a = np.arange(0.0, 2.0 * math.pi, 0.01)
+    circle_a = np.column_stack([radius * np.sin(a), radius - radius * np.cos(a)])
+    circle_b = np.column_stack([radius * np.sin(a), -radius + radius * np.cos(a)])
+    eight = np.vstack([circle_a, circle_b])
+    stations = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(eight, axis=0).T))])
+    lap = stations[-1] + float(np.hypot(*(eight[0] - eight[-1])))
+    half = stations[len(circle_a)]
+
+    def at(s: np.ndarray) -> np.ndarray:
+        s = np.mod(s, lap)
+        ring = np.vstack([eight, eight[:1]])
+        ring_s = np.append(stations, lap)
+        return np.column_stack([np.interp(s, ring_s, ring[:, 0]), np.interp(s, ring_s, ring[:, 1])])
+
+    path = global_path_from_centreline(eight, closed=True)
+    for end_station, side in ((half, -1.0), (lap, 1.0)):
+        sensor = at(np.array([end_station - 5.0, end_station - 4.9]))
+        yaw = math.atan2(*(sensor[1] - sensor[0])[::-1])
+        pose = Pose2D(float(sensor[0, 0]), float(sensor[0, 1]), yaw)
+        buffer = Buffer()
+        synth.set_pose(buffer, pose, 1.0)
+        autopilot = Autopilot(buffer, path)
+        cone_path = at(end_station - np.arange(4.0, -0.01, -0.5))  # to the origin
+        autopilot.station_hint = end_station - 5.0
+        autopilot.path_reference = cone_path
+        autopilot.path_curvature = np.zeros(len(cone_path))
+        local = pose.inverse_transform_points(cone_path)
+        pursued, _ = autopilot._pursuit_path(local, 15.0)
+        added = pose.transform_points(pursued[len(local) :])
+        assert len(added) > 10
+        assert np.all(side * added[2:, 1] > 0.0), (side, added[:4])
