@@ -44,6 +44,7 @@ FloatArray = NDArray[np.float64]
 CENTRELINE_SPACING = 0.5  # [m] spacing of Track.centreline
 MIN_SIDE_CONES = 3  # a boundary needs at least this many cones
 SIDE_TOLERANCE = 0.5  # an orange cone joins a side within this fraction of the half-width
+LANE_END_FINISH_M = 1.0  # [m] an open lane without a finish line finishes this far before its end
 
 
 def lane_geometry(
@@ -153,10 +154,19 @@ def _timing_lines(big: FloatArray, mid: Midline, start_pose: Pose2D | None) -> l
         total = float(cumulative_length(mid.centre, True)[-1])
         ahead = [((line.s - s_start) % total, line) for line in lines]
         return [min(ahead, key=lambda pair: min(pair[0], total - pair[0]))[1]]
-    if lines:
-        return lines
-    s0 = 0.0 if start_pose is None else float(project(mid.centre, False, start_pose.xy[None])[0][0])
-    return [perpendicular_line(mid, s0)]
+    if not lines:
+        s0 = 0.0
+        if start_pose is not None:
+            s0 = float(project(mid.centre, False, start_pose.xy[None])[0][0])
+        lines = [perpendicular_line(mid, s0)]
+    if len(lines) == 1:
+        # No finish line of big orange cones: the run ends at the lane's end
+        # (the validator warns), not never.
+        total = float(cumulative_length(mid.centre, False)[-1])
+        end = perpendicular_line(mid, total - LANE_END_FINISH_M)
+        if end.s > lines[0].s:
+            lines.append(end)
+    return lines
 
 
 def _finish(

@@ -179,10 +179,13 @@ def _check_timing_cones(track: Track, geometry: TrackGeometry, report: Validatio
         return
     if track.layout != Layout.OPEN:
         return
-    if len(geometry.timing_lines) < 2:
+    big = track.cones_of(ConeKind.BIG_ORANGE)
+    finish = geometry.finish_line
+    if len(geometry.timing_lines) < 2 or _near_line(big, finish) < 2:
         report.warnings.append(
             f"open track: no second line of big orange cones (acceleration: the finish "
-            f"{ACCELERATION_LENGTH_M:g} m after the start)"
+            f"{ACCELERATION_LENGTH_M:g} m after the start); the run finishes 1 m before "
+            f"the lane's end"
         )
         return
     start, finish = (line.mean(axis=0) for line in (geometry.start_finish, geometry.finish_line))
@@ -193,6 +196,14 @@ def _check_timing_cones(track: Track, geometry: TrackGeometry, report: Validatio
             f"open track: start and finish lines are {timed:.1f} m apart, FS acceleration "
             f"is timed over {ACCELERATION_LENGTH_M:g} m"
         )
+
+
+def _near_line(points: FloatArray, line: FloatArray, within: float = 1.0) -> int:
+    """How many points lie within ``within`` [m] of the segment ``line`` (2, 2)."""
+    a, b = line
+    ab = b - a
+    t = np.clip((points - a) @ ab / float(ab @ ab), 0.0, 1.0)
+    return int(np.count_nonzero(np.hypot(*(points - (a + t[:, None] * ab)).T) <= within))
 
 
 def _check_lap_length(geometry: TrackGeometry, report: ValidationReport) -> None:

@@ -131,6 +131,25 @@ def test_open_lane_with_braking_zone_and_two_timing_lines() -> None:
     assert not any(np.allclose(p, [175.0, 0.0]) for p in track.right_boundary)
 
 
+def test_open_lane_without_a_finish_line_finishes_at_its_end() -> None:
+    """Only the start's big orange cones: the finish is 1 m before the
+    lane's end (x = 99 m on a lane to 100 m), and the validator says so."""
+    from tracks import check_report
+
+    cones, kinds = [], []
+    for x in range(5, 101, 5):
+        cones += [[x, 1.9], [x, -1.9]]
+        kinds += [ConeKind.BLUE, ConeKind.YELLOW]
+    for line_x in (-0.3, 0.3):
+        cones += [[line_x, 1.9], [line_x, -1.9]]
+        kinds += [ConeKind.BIG_ORANGE] * 2
+    track = Track("lane", np.array(cones, float), tuple(kinds), Pose2D(-2.0, 0.0, 0.0), Layout.OPEN)
+    assert_allclose(track.start_finish, [[0.0, 1.9], [0.0, -1.9]], atol=1e-9)
+    assert_allclose(track.finish_line, [[99.0, 1.9], [99.0, -1.9]], atol=1e-9)
+    warnings = check_report(track)["warnings"]
+    assert any("no second line of big orange cones" in w and "1 m before" in w for w in warnings)
+
+
 def test_skidpad_circles_and_centreline(skidpad) -> None:
     """FS skidpad: circles r 9.125 m, 18.25 m apart; right circle first, clockwise."""
     track = skidpad()
