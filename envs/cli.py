@@ -294,11 +294,12 @@ def _check_render_extra() -> None:
         ) from None
     # On Linux without a display pygame falls back to a driver that shows
     # nothing: the run would be slow (drawing every frame) and silent.
+    # A driver chosen by the user (kmsdrm, fbcon, dummy, ...) is trusted.
     if (
         sys.platform.startswith("linux")
         and not os.environ.get("DISPLAY")
         and not os.environ.get("WAYLAND_DISPLAY")
-        and os.environ.get("SDL_VIDEODRIVER", "") not in {"dummy", "offscreen"}
+        and not os.environ.get("SDL_VIDEODRIVER")
     ):
         raise CliError("--render needs a display (DISPLAY or WAYLAND_DISPLAY is not set)")
 
@@ -309,28 +310,41 @@ def _write_outputs(
     """Write run.png and result.json into ``out``: both, or nothing.
 
     Both go to temporary names first and are moved into place only when both
-    were written; if the second move fails, the first is removed again, and
-    directories this call created are removed on any failure.
+    were written. A previous run's pair is first moved aside and put back if
+    a move fails, so ``out`` holds the new pair or the old one, never one of
+    each; directories this call created are removed on any failure. One run
+    per output directory at a time: two runs writing the same ``out`` at
+    once may still interleave their moves.
     """
     created = _missing_dirs(out)
-    tmp = {name: out / f".{name}.{os.getpid()}.tmp" for name in OUTPUT_FILES}
+    tag = f"{os.getpid()}.tmp"
+    tmp = {name: out / f".{name}.{tag}" for name in OUTPUT_FILES}
+    old = {name: out / f".{name}.old.{tag}" for name in OUTPUT_FILES}
+    aside: list[str] = []
     moved: list[Path] = []
     try:
         out.mkdir(parents=True, exist_ok=True)
         save_run_picture(result, track, global_path, tmp["run.png"])
         tmp["result.json"].write_text(payload + "\n", encoding="utf-8")
         for name in OUTPUT_FILES:
+            if (out / name).exists():
+                os.replace(out / name, old[name])
+                aside.append(name)
+        for name in OUTPUT_FILES:
             os.replace(tmp[name], out / name)
             moved.append(out / name)
     except OSError as exc:
         for path in moved:
             path.unlink(missing_ok=True)
+        for name in aside:
+            with contextlib.suppress(OSError):
+                os.replace(old[name], out / name)
         _remove_temporaries(tmp.values())
         for directory in reversed(created):
             with contextlib.suppress(OSError):
                 directory.rmdir()
         raise CliError(f"--out {out}: cannot write the results ({_reason(exc)})") from None
-    _remove_temporaries(tmp.values())
+    _remove_temporaries([*tmp.values(), *old.values()])
 
 
 def _missing_dirs(out: Path) -> list[Path]:

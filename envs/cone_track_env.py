@@ -66,6 +66,7 @@ from envs.observation import SensorMemory, build_observation, observation_space
 from envs.render import Renderer, Scene
 from envs.stack import VehicleStack
 from localization.frames import LATEST, TransformError
+from localization.geodesy import GeodesyError
 from localization.messages import Message
 from localization.pose import Pose2D
 from sim.world import WorldConfig
@@ -112,25 +113,38 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         goes back to the env's configuration, so the same seed always gives
         the same episode.
         """
-        super().reset(seed=seed)
         options = dict(options or {})
         unknown = sorted(set(options) - set(RESET_OPTIONS))
         if unknown:
             raise ValueError(f"reset options {unknown} unknown; allowed: {list(RESET_OPTIONS)}")
         cfg = self.config
-        track = options.get("track", cfg.track)
-        sensors = options.get("sensors", cfg.sensors)
-        localization = options.get("localization", cfg.localization)
-        EnvConfig(track=track, sensors=sensors, localization=localization)  # validates
+        chosen = EnvConfig(  # validates and normalises the options
+            track=options.get("track", cfg.track),
+            sensors=options.get("sensors", cfg.sensors),
+            localization=options.get("localization", cfg.localization),
+        )
+        track, sensors, localization = chosen.track, chosen.sensors, chosen.localization
         start_pose = _start_pose_option(options.get("start_pose"))
-        episode_seed = int(self.np_random.integers(0, 2**31 - 1))
-        # Build first: a bad option leaves the env as it was.
-        stack = self._build_stack(episode_seed, track, sensors, localization, start_pose)
-        if start_pose is not None and stack.world.race.is_off_track_at(start_pose):
-            raise ValueError(
-                f"reset option start_pose {options['start_pose']!r} puts the car off the "
-                f"track {stack.track.name!r}"
-            )
+        # A refused reset leaves the env as it was, its random generator included.
+        rng, rng_seed = self._np_random, self._np_random_seed
+        rng_state = None if rng is None else rng.bit_generator.state
+        super().reset(seed=seed)
+        try:
+            episode_seed = int(self.np_random.integers(0, 2**31 - 1))
+            stack = self._build_stack(episode_seed, track, sensors, localization, start_pose)
+            if start_pose is not None and stack.world.race.is_off_track_at(start_pose):
+                raise ValueError(
+                    f"reset option start_pose {options['start_pose']!r} puts the car off the "
+                    f"track {stack.track.name!r}"
+                )
+        except Exception as exc:
+            self._np_random, self._np_random_seed = rng, rng_seed
+            if rng is not None and rng_state is not None:
+                rng.bit_generator.state = rng_state
+            if isinstance(exc, GeodesyError) and start_pose is not None:
+                pose = options["start_pose"]
+                raise ValueError(f"reset option start_pose {pose!r}: {exc}") from None
+            raise
         self.stack = stack
         self.overlay = None  # a policy attaches its own after reset
         if self._renderer is not None:

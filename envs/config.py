@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import numbers
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -87,7 +88,7 @@ class EnvConfig:
         _choice("sensors", self.sensors, tuple(SENSOR_PROFILES))
         _choice("localization", self.localization, LOCALIZATION_MODES)
         _choice("observation", self.observation, OBSERVATION_MODES)
-        if not (isinstance(self.track, str) and self.track):
+        if not (isinstance(self.track, str | os.PathLike) and os.fspath(self.track)):
             raise ValueError(f"EnvConfig.track must be a track name or file, got {self.track!r}")
         if not (_is_int(self.laps) and self.laps >= 1):
             raise ValueError(f"EnvConfig.laps must be an integer >= 1, got {self.laps!r}")
@@ -97,6 +98,8 @@ class EnvConfig:
             flag = getattr(self, name)
             if not isinstance(flag, bool | np.bool_):
                 raise ValueError(f"EnvConfig.{name} must be True or False, got {flag!r}")
+        if isinstance(self.rewards, Mapping):
+            object.__setattr__(self, "rewards", _weights(self.rewards))
         if not isinstance(self.rewards, RewardWeights):
             raise ValueError(
                 f"EnvConfig.rewards must be a mapping of reward weights, got {self.rewards!r}"
@@ -115,6 +118,20 @@ class EnvConfig:
             _is_real(self.time_limit) and math.isfinite(self.time_limit) and self.time_limit > 0
         ):
             raise ValueError(f"EnvConfig.time_limit must be > 0 [s], got {self.time_limit!r}")
+        # Plain Python values from here: a numpy float32 rate would make the
+        # simulation clock float32 and the same seed give another run.
+        plain = {
+            "track": os.fspath(self.track),
+            "laps": int(self.laps),
+            "max_cones": int(self.max_cones),
+            "control_rate": float(self.control_rate),
+            "physics_rate": float(self.physics_rate),
+            "time_limit": None if self.time_limit is None else float(self.time_limit),
+            "terminate_off_track": bool(self.terminate_off_track),
+            "terminate_stuck": bool(self.terminate_stuck),
+        }
+        for name, value in plain.items():
+            object.__setattr__(self, name, value)
 
     @property
     def substeps(self) -> int:
@@ -133,15 +150,16 @@ class EnvConfig:
         unknown = sorted(set(values) - set(allowed))
         if unknown:
             raise ValueError(f"EnvConfig: unknown keys {unknown}; allowed keys: {allowed}")
-        kwargs = dict(values)
-        if isinstance(kwargs.get("rewards"), Mapping):
-            weights = kwargs["rewards"]
-            names = [f.name for f in dataclasses.fields(RewardWeights)]
-            bad = sorted(set(weights) - set(names))
-            if bad:
-                raise ValueError(f"RewardWeights: unknown keys {bad}; allowed keys: {names}")
-            kwargs["rewards"] = RewardWeights(**weights)
-        return cls(**kwargs)
+        return cls(**dict(values))
+
+
+def _weights(weights: Mapping[str, Any]) -> RewardWeights:
+    """Reward weights from a mapping; unknown keys raise with the allowed keys listed."""
+    names = [f.name for f in dataclasses.fields(RewardWeights)]
+    bad = sorted(set(weights) - set(names))
+    if bad:
+        raise ValueError(f"RewardWeights: unknown keys {bad}; allowed keys: {names}")
+    return RewardWeights(**weights)
 
 
 def _is_int(value: Any) -> bool:

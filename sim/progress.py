@@ -103,6 +103,16 @@ class PolylineProgress:
         lateral = float(t[0] * r[1] - t[1] * r[0])
         return Projection(float(self._s0[seg] + u[k]), lateral, seg, (float(t[0]), float(t[1])))
 
+    def project_xy_anew(self, x: float, y: float) -> tuple[float, float, int, float, float]:
+        """:meth:`project_xy` searching the whole path, as after :meth:`reset`,
+        and leaving the segment the next walk starts from as it was."""
+        last = self._last
+        self._last = None
+        try:
+            return self.project_xy(x, y)
+        finally:
+            self._last = last
+
     def project_xy(self, px: float, py: float) -> tuple[float, float, int, float, float]:
         """:meth:`project` of one point on plain floats: (s, lateral, index, tx, ty).
 

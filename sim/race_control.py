@@ -179,8 +179,10 @@ class RaceControl:
 
     def is_off_track_at(self, pose: Pose2D) -> bool:
         """Whether the car with its CG at ``pose`` is off the track (all four
-        footprint corners beyond one boundary), without recording anything."""
-        _, lateral, index, tx, ty = self.progress.project_xy(pose.x, pose.y)
+        footprint corners beyond one boundary), without recording anything:
+        the pose is projected from scratch and the tracker's last segment,
+        where the next step's projection starts, is kept."""
+        _, lateral, index, tx, ty = self.progress.project_xy_anew(pose.x, pose.y)
         return self._off(lateral, index, tx, ty, pose.yaw)
 
     def _off(self, lateral: float, index: int, tx: float, ty: float, yaw: float) -> bool:

@@ -398,7 +398,8 @@ def test_outputs_are_both_or_nothing(tmp_path: Path, monkeypatch: pytest.MonkeyP
     real_replace = os.replace
 
     def replace(src: Path, dst: Path) -> None:
-        if Path(dst).name == "result.json":
+        # Moving the new result.json in fails; putting an old one back works.
+        if Path(dst).name == "result.json" and ".old." not in Path(src).name:
             raise IsADirectoryError(21, "Is a directory", str(src))
         real_replace(src, dst)
 
@@ -414,6 +415,21 @@ def test_outputs_are_both_or_nothing(tmp_path: Path, monkeypatch: pytest.MonkeyP
         out_dir, "{}", cast(RunResult, None), cast(Track, None), cast(GlobalPath, None)
     )
     assert sorted(p.name for p in out_dir.iterdir()) == ["result.json", "run.png"]
+    # A previous pair stays whole when the new one cannot be moved in.
+    (out_dir / "result.json").write_text("old json")
+    (out_dir / "run.png").write_bytes(b"old png")
+    monkeypatch.setattr(os, "replace", replace)
+    monkeypatch.setattr(
+        cli, "save_run_picture", lambda result, track, path, out: out.write_bytes(b"new png")
+    )
+    with pytest.raises(cli.CliError, match="cannot write the results"):
+        cli._write_outputs(
+            out_dir, "{}", cast(RunResult, None), cast(Track, None), cast(GlobalPath, None)
+        )
+    monkeypatch.setattr(os, "replace", real_replace)
+    assert sorted(p.name for p in out_dir.iterdir()) == ["result.json", "run.png"]
+    assert (out_dir / "run.png").read_bytes() == b"old png"
+    assert (out_dir / "result.json").read_text() == "old json"
 
 
 @pytest.mark.skipif(not Path("/dev/zero").exists(), reason="needs a /dev/zero device")

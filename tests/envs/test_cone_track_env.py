@@ -257,6 +257,14 @@ def test_config_types_numpy_integers_yes_bools_and_strings_no() -> None:
     count, a string is not a flag, a list is not a set of reward weights."""
     cfg = EnvConfig(laps=np.int64(2), max_cones=np.int64(16), control_rate=np.float32(25.0))
     assert (cfg.laps, cfg.max_cones, cfg.substeps) == (2, 16, 8)
+    # Stored as plain Python values: a float32 rate would make the clock float32.
+    assert type(cfg.laps) is int and type(cfg.control_rate) is float
+    assert EnvConfig(rewards={"time": -0.5}).rewards.time == -0.5
+    from tracks import load_track
+
+    source = load_track("autocross").source
+    assert source is not None
+    assert EnvConfig(track=source).track == str(source)  # a path is a track file
     bad = {
         "laps": True,
         "terminate_off_track": "no",
@@ -283,3 +291,18 @@ def test_bad_start_pose_option_is_named(start: object) -> None:
     with pytest.raises(ValueError, match="reset option start_pose"):
         env.reset(seed=0, options={"start_pose": start})
     assert env.stack is before
+
+
+def test_a_refused_reset_leaves_the_random_generator_as_it_was() -> None:
+    """After a refused reset (an off-track start), reset() without a seed
+    gives the episode it would have given."""
+    env = ConeTrackEnv(track="acceleration")
+    env.reset(seed=0)
+    expected, _ = env.reset()
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="off the"):
+        env.reset(options={"start_pose": (0.0, 30.0, 0.0)})
+    with pytest.raises(ValueError, match="reset option start_pose"):
+        env.reset(seed=5, options={"start_pose": (1.0e7, 0.0, 0.0)})
+    again, _ = env.reset()
+    assert np.array_equal(again, expected)

@@ -110,6 +110,20 @@ def test_projection_window_follows_a_figure_eight() -> None:
     assert np.all(np.diff(s_values) > 0)
 
 
+def test_projecting_anew_leaves_the_walk_where_it_was() -> None:
+    """Driving the eight through its crossing, a look at a far point
+    (``project_xy_anew``, as the start-pose check does) between two steps
+    changes none of the walk's answers."""
+    t = np.linspace(0, 2 * math.pi, 400, endpoint=False)
+    eight = np.column_stack([10 * np.sin(t), 10 * np.sin(t) * np.cos(t)])
+    plain = PolylineProgress(eight, closed=True, window_m=5.0)
+    looked = PolylineProgress(eight, closed=True, window_m=5.0)
+    far = PolylineProgress(eight, closed=True, window_m=5.0).project_xy(-9.0, -2.0)
+    for p in eight[3::5]:
+        assert looked.project_xy_anew(-9.0, -2.0) == far  # as a fresh search finds it
+        assert looked.project_xy(*p) == plain.project_xy(*p)
+
+
 def test_segment_crossing_fraction() -> None:
     """A step from (0,-1) to (0,3) crosses the x axis a quarter of the way."""
     u = segment_crossing(
