@@ -331,7 +331,8 @@ class Autopilot:
         The local path, and when it ends inside the lookahead circle
         (``pursue_global_beyond_path``; the lookahead before its cap, which is
         then taken over both), the global path from the station of its end
-        to 1.5 m beyond one lookahead distance, every 0.5 m. The end's
+        to 1.5 m beyond one lookahead distance, every 0.5 m, unless the end
+        lies farther than ``pursue_global_max_gap`` from it. The end's
         station is looked for from 5 m behind the sensor's station at the
         plan to the planner's range (``midline.max_range``, 30 m) ahead of
         it: the skidpad's other circle, about 57 m round, lies outside.
@@ -349,6 +350,8 @@ class Autopilot:
             return path, curvature
         window = (hint - 5.0, hint + c.midline.max_range)
         end = self.projector.project(self.path_reference[-1:], window=window)
+        if not float(end.distance[0]) <= c.pursue_global_max_gap:
+            return path, curvature  # the map and the cones disagree here
         stations = float(end.station[0]) + np.arange(0.5, look + 2.0, 0.5)
         if not gs.closed:
             stations = stations[stations <= gs.length]

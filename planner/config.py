@@ -425,6 +425,10 @@ class AutopilotConfig(Settings):
             end). Needs ``global_speed`` (the global path's stations and
             curvature; the lookahead cap reads the curvature beyond the
             cones too).
+        pursue_global_max_gap: ... and only where the cone path's end, placed
+            in ``reference`` by the pose, lies within this distance of the
+            global path [m]: where the map and the cones disagree by more
+            (a poor pose), the car keeps to the cones.
         speed_window: span of the frame-tree speed estimate used when no wheel
             speed has arrived [s].
         reference_frame: the world frame (a vehicle prefix is allowed).
@@ -440,6 +444,7 @@ class AutopilotConfig(Settings):
     global_speed: bool = True
     speed_source: str = "global"
     pursue_global_beyond_path: bool = True
+    pursue_global_max_gap: float = 1.0  # [m] raw pose (150 ms late): gaps up to 0.7 m
     speed_window: float = 0.1  # [s]
     reference_frame: str = FRAME_REFERENCE
     sensor_frame: str = FRAME_OS_SENSOR
@@ -469,6 +474,7 @@ class AutopilotConfig(Settings):
     def __post_init__(self) -> None:
         _check("AutopilotConfig", "control_rate", self.control_rate, 1e-9)
         _check("AutopilotConfig", "speed_window", self.speed_window, 1e-9)
+        _check("AutopilotConfig", "pursue_global_max_gap", self.pursue_global_max_gap, 0.0)
         if self.speed_source not in ("local", "global"):
             raise ValueError(
                 f"AutopilotConfig.speed_source = {self.speed_source!r}: allowed 'local', 'global'"

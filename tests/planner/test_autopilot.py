@@ -383,3 +383,26 @@ def test_pursuit_continuation_takes_the_right_circle_at_a_figure_of_eight(
         added = pose.transform_points(pursued[len(local) :])
         assert len(added) > 10
         assert np.all(side * added[2:, 1] > 0.0), (side, added[:4])
+
+
+def test_no_pursuit_continuation_where_the_map_and_the_cones_disagree(
+    synth: ModuleType, circle
+) -> None:
+    """The scene of the continuation test with the pose in the frame tree
+    0.5 m to the side of where the cones were seen: the cone path's end lies
+    0.5 m from the global path, within the default 1 m gap (continued), not
+    within a gap of 0.3 m (the car keeps to the cones). (A pose more than
+    about 1 m off already fails the planner's own checks of the cones
+    against the global path.)"""
+    scene = synth.make_scene(circle, synth.pose_on(circle, 30), max_range=9.0)
+    buffer = Buffer()
+    synth.set_pose(buffer, synth.pose_on(circle, 30, lateral=0.5), scene.stamp)
+    for gap, continued in ((1.0, True), (0.3, False)):
+        autopilot = Autopilot(
+            buffer, circle.global_path, AutopilotConfig(pursue_global_max_gap=gap)
+        )
+        autopilot.on_wheel_speed(WheelSpeed(Header(scene.stamp, "gps_antenna"), 15.0, 0.01))
+        assert autopilot.on_detections(scene.detections).status is PlanStatus.OK
+        autopilot.control(scene.stamp)
+        added = len(autopilot.pursuit_path) - len(autopilot.path_now)
+        assert (added > 0) is continued, (gap, added)
