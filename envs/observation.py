@@ -21,8 +21,9 @@ in ``fused`` mode the EKF's estimate now and its covariance; in ``raw`` and
 ``truth`` mode the pose the frame tree holds (the broadcaster's last
 ``reference -> gps_antenna``) with a zero covariance. ``pose_valid`` is 1 when
 there is a pose, 0 before the first one (the filter not yet initialised, no
-broadcast yet), when ``pose`` and ``pose_covariance`` are zeros. Every value is clipped into the
-space's bounds so ``observation_space.contains(obs)`` always holds.
+broadcast yet), when ``pose`` and ``pose_covariance`` are zeros. Every value
+is clipped into the space's bounds so ``observation_space.contains(obs)``
+always holds.
 """
 
 from __future__ import annotations

@@ -27,6 +27,7 @@ from localization.geodesy import (
     local_cartesian_to_gps,
 )
 from tracks import Track, TrackFormatError
+from tracks.polyline import resample
 
 COV_THRESHOLD_M2 = 0.0025  # [m^2] seed: "error > threshold, e.g. >5 cm if threshold=0.0025"
 DERIVED_PATH_COV_M2 = 0.0004  # [m^2] a path surveyed from the cones: 2 cm sigma
@@ -274,6 +275,7 @@ def global_path_for_track(track: Track, origin: ReferenceOrigin = DEFAULT_ORIGIN
 
 OFF_TRACK_MARGIN_M = 1.0  # [m] beyond half the track's widest width
 FIT_FRACTION = 0.1  # more than this share off (or uncovered) is an error
+DENSE_SPACING_M = 0.25  # [m] the polylines' spacing for the nearest-point queries
 
 
 def global_path_findings(track: Track, path: GlobalPath) -> tuple[list[str], list[str]]:
@@ -299,8 +301,9 @@ def global_path_findings(track: Track, path: GlobalPath) -> tuple[list[str], lis
     path_name = "global path"
     if track.global_path_file is not None:
         path_name = f"global path {track.global_path_file.name}"
-    off_d, _ = cKDTree(_densified(centre, track.layout == "closed")).query(path.xy)
-    covered, _ = cKDTree(_densified(path.xy, path.closed)).query(centre)
+    fine = DENSE_SPACING_M
+    off_d, _ = cKDTree(resample(centre, track.layout == "closed", fine)).query(path.xy)
+    covered, _ = cKDTree(resample(path.xy, path.closed, fine)).query(centre)
     warnings: list[str] = []
     errors: list[str] = []
     off = off_d > limit
@@ -319,12 +322,3 @@ def global_path_findings(track: Track, path: GlobalPath) -> tuple[list[str], lis
             f"centreline is more than {limit:.1f} m from the path"
         )
     return warnings, errors
-
-
-def _densified(points: FloatArray, closed: bool, spacing: float = 0.25) -> FloatArray:
-    """The polyline (n, 2) with points at most ``spacing`` [m] apart (closed: the loop)."""
-    pts = np.vstack([points, points[:1]]) if closed else np.asarray(points, dtype=float)
-    seg = np.hypot(*np.diff(pts, axis=0).T)
-    s = np.concatenate([[0.0], np.cumsum(seg)])
-    fine = np.linspace(0.0, s[-1], max(2, math.ceil(s[-1] / spacing) + 1))
-    return np.column_stack([np.interp(fine, s, pts[:, 0]), np.interp(fine, s, pts[:, 1])])

@@ -37,7 +37,7 @@ from scipy.ndimage import uniform_filter1d
 from tracks.derived import TrackGeometry
 from tracks.errors import TrackFormatError
 from tracks.kinds import ConeKind, Layout
-from tracks.lanes import MIN_SIDE_CONES
+from tracks.lanes import LANE_END_FINISH_M, MIN_SIDE_CONES
 from tracks.model import Track
 from tracks.polyline import project, ring, segment_crossings
 
@@ -184,8 +184,8 @@ def _check_timing_cones(track: Track, geometry: TrackGeometry, report: Validatio
     if len(geometry.timing_lines) < 2 or _near_line(big, finish) < 2:
         report.warnings.append(
             f"open track: no second line of big orange cones (acceleration: the finish "
-            f"{ACCELERATION_LENGTH_M:g} m after the start); the run finishes 1 m before "
-            f"the lane's end"
+            f"{ACCELERATION_LENGTH_M:g} m after the start); the run finishes "
+            f"{LANE_END_FINISH_M:g} m before the lane's end"
         )
         return
     start, finish = (line.mean(axis=0) for line in (geometry.start_finish, geometry.finish_line))
@@ -200,10 +200,8 @@ def _check_timing_cones(track: Track, geometry: TrackGeometry, report: Validatio
 
 def _near_line(points: FloatArray, line: FloatArray, within: float = 1.0) -> int:
     """How many points lie within ``within`` [m] of the segment ``line`` (2, 2)."""
-    a, b = line
-    ab = b - a
-    t = np.clip((points - a) @ ab / float(ab @ ab), 0.0, 1.0)
-    return int(np.count_nonzero(np.hypot(*(points - (a + t[:, None] * ab)).T) <= within))
+    _, _, foot = project(line, False, points)
+    return int(np.count_nonzero(np.hypot(*(points - foot).T) <= within))
 
 
 def _check_lap_length(geometry: TrackGeometry, report: ValidationReport) -> None:
