@@ -9,7 +9,13 @@ Prints (timing never decides a test):
 2. the real-time factor of ``conesim run``'s loop on autocross, full stack
    (sensors, EKF, planner, control), one core;
 3. the autopilot's best lap against the friction-limited lap time along the
-   true centreline, on every closed track.
+   true centreline, on every closed track;
+4. the floor filterpy's EKF sets: the time spent inside filterpy's own
+   ``ExtendedKalmanFilter.predict`` and ``update`` calls during section 1's
+   rtk/fused run (the design card names filterpy's EKF; these calls are its
+   numpy code, not ours), per env step and per simulated second, and the
+   ceilings that time alone puts on the figures of issue 6 with everything
+   else (physics, sensors, planner, our own EKF code) taken as free.
 
 Section 1 times CPU time (``time.process_time``), so that another process on
 a busy machine does not inflate it; section 2 reports the run's wall time.
@@ -18,7 +24,7 @@ The bare physics and the World steps replay the env's actions (the same
 commands, held for the same substeps), so they time the car driving as in
 the env run, not standing still.
 
-Run: ``.venv/bin/python benchmarks/bench_env.py [--sections 1,2,3]
+Run: ``.venv/bin/python benchmarks/bench_env.py [--sections 1,2,3,4]
 [--localization fused|raw|truth]``.
 """
 
@@ -26,8 +32,12 @@ from __future__ import annotations
 
 import argparse
 import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Any
 
 import numpy as np
+from filterpy.kalman import ExtendedKalmanFilter
 
 from envs.cone_track_env import ConeTrackEnv
 from envs.runner import run_scenario
@@ -77,7 +87,7 @@ def env_rate(sensors: str, localization: str = "fused") -> tuple[float, float, f
 def main() -> None:
     """Print the figures."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sections", default="1,2,3", help="comma-separated: 1, 2, 3")
+    parser.add_argument("--sections", default="1,2,3,4", help="comma-separated: 1, 2, 3, 4")
     parser.add_argument("--localization", default="fused", choices=("fused", "raw", "truth"))
     args = parser.parse_args()
     sections = {s.strip() for s in args.sections.split(",")}
@@ -94,6 +104,8 @@ def main() -> None:
         closed_loop()
     if "3" in sections:
         lap_ratios()
+    if "4" in sections:
+        filterpy_floor()
 
 
 def closed_loop() -> None:
@@ -117,6 +129,55 @@ def lap_ratios() -> None:
             f"  {track:12s} best {best}  limit {r.limit_lap_time_s:6.2f} s  ratio {ratio}"
             f"  cones hit {r.cones_hit}"
         )
+
+
+@contextmanager
+def timed_filterpy() -> Iterator[list[float]]:
+    """Accumulate the CPU time [s] spent in filterpy's EKF ``predict`` and ``update``.
+
+    Yields a one-element list holding the running total; the methods are put
+    back on exit.
+    """
+    total = [0.0]
+    originals = {name: getattr(ExtendedKalmanFilter, name) for name in ("predict", "update")}
+
+    def timed(method: Callable[..., Any]) -> Callable[..., Any]:
+        def call(*args: Any, **kwargs: Any) -> Any:
+            t0 = time.process_time()
+            try:
+                return method(*args, **kwargs)
+            finally:
+                total[0] += time.process_time() - t0
+
+        return call
+
+    try:
+        for name, method in originals.items():
+            setattr(ExtendedKalmanFilter, name, timed(method))
+        yield total
+    finally:
+        for name, method in originals.items():
+            setattr(ExtendedKalmanFilter, name, method)
+
+
+def filterpy_floor() -> None:
+    """Section 4: filterpy's own time in the loop and the ceilings it alone sets."""
+    with timed_filterpy() as inside:
+        rate, phys, _ = env_rate("rtk", "fused")
+    per_step = inside[0] / STEPS  # [s] filterpy per env step
+    physics_per_step = phys / rate  # [s] bare physics per env step
+    steps_per_sim_s = ConeTrackEnv(track="autocross").config.control_rate
+    per_sim_s = per_step * steps_per_sim_s
+    print(
+        "filterpy's own EKF calls (predict, update) in the env, rtk, fused, autocross:"
+        f"\n  {1e6 * per_step:.0f} us per env step ({1e3 * per_sim_s:.1f} ms per simulated"
+        f" second), {100 * per_step * rate:.1f} % of the env's time"
+        "\n  ceilings with everything else free: env"
+        f" {1 / per_step:,.0f} steps/s (target 5,000); env / physics"
+        f" >= {1 + per_step / physics_per_step:.1f}x (target 2x, physics"
+        f" {1e6 * physics_per_step:.0f} us per step); real time factor"
+        f" {1 / per_sim_s:.0f}x (target 100x)"
+    )
 
 
 if __name__ == "__main__":
