@@ -101,6 +101,7 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         self._action = np.zeros(2, dtype=np.float32)
         self._memory = SensorMemory()
         self.last_messages: list[Message] = []
+        self._counts: dict[str, float] | None = None  # score at the last step; None before reset
 
     # -- gymnasium API -----------------------------------------------------------------------
 
@@ -156,14 +157,20 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         self._counts = self._score_counts()
         if self.render_mode == "human":
             self.render()
-        return self._observe(), self._info({}, "")
+        return self._observe(), self._info(dict.fromkeys(self._reward_weights(), 0.0), "")
 
     def step(
         self, action: NDArray[np.float32]
     ) -> tuple[ObsType, SupportsFloat, bool, bool, dict[str, Any]]:
         """Apply an action for one control period (``physics_rate / control_rate`` steps)."""
         # 1. act
-        act = np.asarray(action, dtype=np.float32).reshape(2)
+        if self._counts is None:
+            raise gym.error.ResetNeeded("call reset() before step()")
+        act = np.asarray(action, dtype=np.float32)
+        if act.shape != (2,):
+            raise ValueError(
+                f"action must have shape (2,) (steering, acceleration), got shape {act.shape}"
+            )
         a0, a1 = act.tolist()
         if not (math.isfinite(a0) and math.isfinite(a1)):
             raise ValueError(f"action must be finite, got {action!r}")
@@ -257,10 +264,10 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
             "lap": float(race.laps_completed),
         }
 
-    def _reward_terms(self) -> dict[str, float]:
-        counts = self._score_counts()
+    def _reward_weights(self) -> dict[str, float]:
+        """Each reward term's weight, by name (the keys of ``info["reward_terms"]``)."""
         w = self.config.rewards
-        weights = {
+        return {
             "progress": w.progress,
             "time": w.time,
             "cone_hit": w.cone_hit,
@@ -268,7 +275,14 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
             "off_track": w.off_track,
             "lap": w.lap,
         }
-        terms = {k: weights[k] * (counts[k] - self._counts[k]) for k in weights}
+
+    def _reward_terms(self) -> dict[str, float]:
+        counts = self._score_counts()
+        weights = self._reward_weights()
+        last = self._counts
+        assert last is not None  # step() checks that reset() came first
+        # + 0.0: a term with nothing to count is 0.0, not -0.0 (a negative weight times 0)
+        terms = {k: weights[k] * (counts[k] - last[k]) + 0.0 for k in weights}
         self._counts = counts
         return terms
 
@@ -316,10 +330,13 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
             "messages": self.last_messages,
         }
         samples = self.stack.localization_samples
+        # Always a dict, inf (no pose yet) before the first broadcast: gymnasium's
+        # vector envs stack each info key across sub-envs and need one type per
+        # key, and its checker compares infos with == (NaN != NaN).
         info["localization_error"] = (
             {"position_m": samples[-1].position_error, "yaw_rad": samples[-1].yaw_error}
             if samples
-            else None
+            else {"position_m": math.inf, "yaw_rad": math.inf}
         )
         return info
 

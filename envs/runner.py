@@ -128,12 +128,21 @@ def run_scenario(
         localization: ``fused``, ``raw`` or ``truth``.
         render: show a window (the ``render`` extra).
         progress: called as ``progress(sim_time, time_limit)`` every control step.
-        env_options: further ``EnvConfig`` fields.
+        env_options: further ``EnvConfig`` fields (not the ones named above).
 
     Raises:
         TrackFormatError: the track cannot be read, or the world cannot be
             built on it (the message names the track and its start pose).
+        ValueError: ``env_options`` repeats an argument of this function, or
+            ``EnvConfig`` refuses a field.
     """
+    named = {"track", "laps", "sensors", "localization", "render_mode"}
+    repeated = sorted(named.intersection(env_options or {}))
+    if repeated:
+        raise ValueError(
+            f"run_scenario: env_options {repeated} repeat arguments of run_scenario; "
+            "pass them as its keywords"
+        )
     with _world_build_errors(track):
         env = ConeTrackEnv(
             render_mode="human" if render else None,

@@ -103,6 +103,12 @@ class PolylineProgress:
         lateral = float(t[0] * r[1] - t[1] * r[0])
         return Projection(float(self._s0[seg] + u[k]), lateral, seg, (float(t[0]), float(t[1])))
 
+    def restart_at(self, index: int) -> None:
+        """Go on walking from segment ``index`` (as if the last answer had been there)."""
+        if not 0 <= index < len(self._segments):
+            raise ValueError(f"segment {index} is not in 0..{len(self._segments) - 1}")
+        self._last = index
+
     def project_xy_anew(self, x: float, y: float) -> tuple[float, float, int, float, float]:
         """:meth:`project_xy` searching the whole path, as after :meth:`reset`,
         and leaving the segment the next walk starts from as it was."""

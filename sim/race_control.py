@@ -16,6 +16,15 @@
   corners) lies outside the boundaries on one side (FS: "off course" when all
   four wheels leave the track). Each excursion is an event with start and end
   time.
+* Where the car is along the track: the centreline projection follows the car
+  from segment to segment (``PolylineProgress``), so that the legs of a
+  hairpin or a figure of eight never swap. Off the track that walk can hold
+  on to the stretch the car left while the car crosses the infield to another
+  one; so while the car's centre is outside the track, a search of the whole
+  centreline moves the walk to a stretch ``rejoin_margin_m`` nearer than the
+  one it holds. Progress is the net change of the car's station, so a cut
+  counts the stretch it skipped (positive or negative) and is an off-track
+  event (FS charges 10 s per off-course).
 * Stuck: less than ``stuck_progress_m`` of net progress in ``stuck_time_s``.
 """
 
@@ -41,11 +50,15 @@ class RaceRules:
             as a fraction of the lap length [-].
         stuck_time_s: window of the stuck detector [s].
         stuck_progress_m: net progress below which the car is stuck [m].
+        rejoin_margin_m: with the car's centre off the track, its projection
+            moves to another stretch of the track that is this much nearer
+            than the one it holds [m].
     """
 
     min_lap_fraction: float = 0.75
     stuck_time_s: float = 5.0
     stuck_progress_m: float = 0.5
+    rejoin_margin_m: float = 1.0
 
     def __post_init__(self) -> None:
         if not 0.0 < self.min_lap_fraction <= 1.0:
@@ -57,6 +70,10 @@ class RaceRules:
         if not self.stuck_progress_m >= 0.0:
             raise ValueError(
                 f"RaceRules.stuck_progress_m must be >= 0, got {self.stuck_progress_m!r}"
+            )
+        if not (self.rejoin_margin_m >= 0.0 and math.isfinite(self.rejoin_margin_m)):
+            raise ValueError(
+                f"RaceRules.rejoin_margin_m must be finite and >= 0, got {self.rejoin_margin_m!r}"
             )
 
 
@@ -170,12 +187,26 @@ class RaceControl:
         # Runs every physics step: plain-float maths, the checks written out.
         p1x, p1y, yaw = pose
         s, lateral, index, tx, ty = self.progress.project_xy(p1x, p1y)
+        if abs(lateral) > self._half_widths_list[min(index, len(self._half_widths_list) - 1)]:
+            s, lateral, index, tx, ty = self._nearer_stretch(p1x, p1y, (s, lateral, index, tx, ty))
         self._advance_progress(s)
         p0x, p0y = xy_prev
         if (p1x - p0x) * tx + (p1y - p0y) * ty > 0.0:
             self._crossed(t_prev, t, (p0x, p0y), (p1x, p1y))
         self._set_off_track(t, self._off(lateral, index, tx, ty, yaw))
         self._check_stuck(t)
+
+    def _nearer_stretch(
+        self, px: float, py: float, walked: tuple[float, float, int, float, float]
+    ) -> tuple[float, float, int, float, float]:
+        """The projection of an off-track centre (px, py): the walk's, or that of
+        a stretch found by a whole-centreline search when it is
+        ``rejoin_margin_m`` nearer (the walk then goes on from there)."""
+        found = self.progress.project_xy_anew(px, py)
+        if abs(found[1]) < abs(walked[1]) - self.rules.rejoin_margin_m:
+            self.progress.restart_at(found[2])
+            return found
+        return walked
 
     def is_off_track_at(self, pose: Pose2D) -> bool:
         """Whether the car with its CG at ``pose`` is off the track (all four

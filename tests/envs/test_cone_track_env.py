@@ -64,6 +64,7 @@ def test_action_mapping_to_vehicle_limits() -> None:
     assert_allclose(env.action_to_command(np.array([1.0, 1.0])), (0.47, 3.0))
     assert_allclose(env.action_to_command(np.array([-1.0, -1.0])), (-0.47, -10.0))
     assert_allclose(env.command_to_action(0.235, -5.0), [0.5, -0.5])
+    env.reset(seed=0)
     with pytest.raises(ValueError, match="finite"):
         env.step(np.array([np.nan, 0.0], dtype=np.float32))
 
@@ -136,6 +137,66 @@ def test_make_vec(mode: str) -> None:
         assert np.all(np.isfinite(obs))
     finally:
         vec.close()
+
+
+def _shape_of(value: object) -> object:
+    """The keys and value types of an info, recursively (lists as one type)."""
+    if isinstance(value, dict):
+        return {k: _shape_of(v) for k, v in value.items()}
+    return type(value)
+
+
+@pytest.mark.parametrize("localization", ["fused", "raw", "truth"])
+def test_info_has_one_shape_from_reset_to_every_step(localization: str) -> None:
+    """Every info key keeps its type from reset() on (gymnasium's vector envs
+    stack them key by key); before the first broadcast the localization error
+    is inf, not None."""
+    env = ConeTrackEnv(track="acceleration", localization=localization)
+    _, info = env.reset(seed=0)
+    shape = _shape_of(info)
+    if localization != "truth":  # truth broadcasts at t = 0
+        assert info["localization_error"] == {"position_m": math.inf, "yaw_rad": math.inf}
+    for _ in range(3):
+        _, _, _, _, info = env.step(np.array([0.0, 0.5], dtype=np.float32))
+        assert _shape_of(info) == shape
+    assert info["localization_error"]["position_m"] < 0.2
+
+
+def test_vector_env_with_episodes_ending_apart() -> None:
+    """A sync vector env whose sub-envs end at different steps autoresets one
+    and stacks the infos of a fresh and a running episode (this raised in
+    gymnasium's info stacking when the fresh one's localization error was None)."""
+    vec = gym.vector.SyncVectorEnv(
+        [
+            lambda: gym.make(envs.ENV_ID, track="acceleration", time_limit=0.1),
+            lambda: gym.make(envs.ENV_ID, track="acceleration", time_limit=1.0),
+        ]
+    )
+    try:
+        vec.reset(seed=0)
+        ended = []
+        for _ in range(8):
+            _, _, terminated, truncated, info = vec.step(np.zeros((2, 2), dtype=np.float32))
+            ended.append((terminated | truncated).tolist())
+        assert ended[4] == [True, False]  # 0.1 s = 5 steps at 50 Hz
+        # The fresh episode has no broadcast yet (inf), the running one has.
+        error = info["localization_error"]["position_m"]
+        assert error.shape == (2,) and error[0] == math.inf and math.isfinite(error[1])
+    finally:
+        vec.close()
+
+
+def test_step_needs_reset_and_an_action_of_two() -> None:
+    """step() before reset() and an action of another shape are refused by name."""
+    env = ConeTrackEnv(track="acceleration")
+    with pytest.raises(gym.error.ResetNeeded, match="reset"):
+        env.step(np.zeros(2, dtype=np.float32))
+    env.reset(seed=0)
+    for bad in (np.zeros(3), np.zeros((1, 2))):
+        with pytest.raises(ValueError, match=r"action must have shape \(2,\)"):
+            env.step(bad)
+    _, _, _, _, info = env.step([0.0, 0.0])  # a list of two is an action
+    assert all(math.copysign(1.0, v) == 1.0 for k, v in info["reward_terms"].items() if v == 0.0)
 
 
 def test_human_mode_without_pygame_names_the_extra(monkeypatch: pytest.MonkeyPatch) -> None:

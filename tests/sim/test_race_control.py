@@ -124,6 +124,80 @@ def test_projecting_anew_leaves_the_walk_where_it_was() -> None:
         assert looked.project_xy(*p) == plain.project_xy(*p)
 
 
+ARC_SEGMENTS = 94  # chords on each 15 m semicircle of the stadium
+
+
+def stadium_control(**rules: float) -> RaceControl:
+    """A counter-clockwise stadium 4 m wide: y = 0 from x = 0 to 100 (driving
+    +x), a semicircle of 15 m about (100, 15), y = 30 back to x = 0, a
+    semicircle about (0, 15); the line across it at x = 10."""
+    straight = np.arange(0.0, 100.0, 0.5)
+    a = np.linspace(-math.pi / 2, math.pi / 2, ARC_SEGMENTS + 1)[:-1]
+    centre = np.vstack(
+        [
+            np.column_stack([straight, np.zeros_like(straight)]),
+            np.column_stack([100.0 + 15.0 * np.cos(a), 15.0 + 15.0 * np.sin(a)]),
+            np.column_stack([100.0 - straight, np.full_like(straight, 30.0)]),
+            np.column_stack([-15.0 * np.cos(a), 15.0 - 15.0 * np.sin(a)]),
+        ]
+    )
+    arc = ARC_SEGMENTS * 30.0 * math.sin(math.pi / (2 * ARC_SEGMENTS))  # chords' length
+    return RaceControl(
+        centre,
+        True,
+        half_widths=np.full(len(centre), 2.0),
+        start_finish=np.array([[10.0, -2.0], [10.0, 2.0]]),
+        lap_length=200.0 + 2.0 * arc,
+        car_length=2.9,
+        car_width=1.4,
+        rules=RaceRules(**rules),
+    )
+
+
+def cut_across_the_infield(rc: RaceControl) -> list[bool]:
+    """From (20, 0) along y = 0 to x = 50, straight across the infield to the
+    other straight (50, 30), then 10 m along it; off track at each step."""
+    legs = [
+        [Pose2D(x, 0.0, 0.0) for x in np.arange(20.0, 50.0, 0.05)],
+        [Pose2D(50.0, y, math.pi / 2) for y in np.arange(0.0, 30.0, 0.05)],
+        [Pose2D(x, 30.0, math.pi) for x in np.arange(50.0, 39.99, -0.05)],
+    ]
+    poses = [p for leg in legs for p in leg]
+    dt = 0.01
+    rc.start(0.0, poses[0])
+    off = []
+    for k in range(1, len(poses)):
+        rc.update((k - 1) * dt, k * dt, poses[k - 1], poses[k])
+        off.append(rc.state.is_off_track)
+    return off
+
+
+def test_a_cut_across_the_infield_rejoins_the_other_straight() -> None:
+    """Off the track, the projection moves to the straight the car crosses to
+    once that is 1 m nearer (y > 15.5), and progress is the net change of
+    station: 30 m, the 147.1 m skipped (50 m, a semicircle's chords, 50 m), and
+    10 m. One excursion: the body leaves at y > 2 + 1.45 and is back at y > 26.55."""
+    rc = stadium_control()
+    off = cut_across_the_infield(rc)
+    arc = ARC_SEGMENTS * 30.0 * math.sin(math.pi / (2 * ARC_SEGMENTS))
+    assert_allclose(rc.state.progress_m, 30.0 + (50.0 + arc + 50.0) + 10.0, atol=1e-9)
+    events = rc.state.off_track
+    assert len(events) == 1 and events[0].end is not None
+    # Steps of 0.05 m from y = 0 at k = 600 (0.01 s each): out at 3.45 m, back at 26.55 m.
+    assert_allclose([events[0].start, events[0].end], [6.0 + 0.69, 6.0 + 5.31], atol=0.011)
+    assert not any(off[-200:])
+
+
+def test_without_rejoining_the_walk_holds_the_straight_it_left() -> None:
+    """The same cut with the rejoin margin out of reach: the walk stays on
+    y = 0, the car counts as off track to the end, and the 10 m driven along
+    the other straight read as 10 m backwards: progress 30 - 10 m."""
+    rc = stadium_control(rejoin_margin_m=1e6)
+    off = cut_across_the_infield(rc)
+    assert off[-1]
+    assert_allclose(rc.state.progress_m, 30.0 - 10.0, atol=1e-9)
+
+
 def test_segment_crossing_fraction() -> None:
     """A step from (0,-1) to (0,3) crosses the x axis a quarter of the way."""
     u = segment_crossing(
