@@ -10,7 +10,8 @@ Vector mode (float32, shape ``(6 + 3 K,)``)::
 * ``steer_cmd``, ``accel_cmd``: the previous action, in [-1, 1];
 * ``pos_std`` [m], ``yaw_std`` [rad]: the EKF's 1-sigma uncertainty, the
   position's radial sqrt(sigma_x^2 + sigma_y^2) and the heading's (0 when no
-  filter runs: ``truth`` is exact, ``raw`` states none);
+  filter runs: ``truth`` is exact, ``raw`` states none; their upper bounds,
+  1000 m and pi, while the filter has no estimate yet);
 * ``x_i, y_i`` [m]: the latest cone detection in ``os_sensor``, nearest first
   (the seed's ``/sorted_cones_time``), ``m_i`` = 1 for a real entry and 0 for
   padding (padded entries are zero).
@@ -105,13 +106,19 @@ def build_observation(
     mode: str,
     *,
     published: Pose2D | None = None,
+    awaiting_estimate: bool = False,
 ) -> NDArray[np.float32] | dict[str, NDArray[np.float32]]:
     """The observation for the current step (see the module docstring).
 
     ``published`` is the frame tree's pose, used in dict mode when there is
     no ``estimate`` (``raw`` and ``truth`` localization).
+    ``awaiting_estimate``: a filter runs but has no estimate yet, so the
+    uncertainties are their upper bounds, not the 0 of "no filter".
     """
-    if estimate is not None:
+    if estimate is None and awaiting_estimate:
+        speed, yaw_rate = memory.wheel_speed, memory.yaw_rate
+        pos_std, yaw_std = float(EGO_HIGH[4]), float(EGO_HIGH[5])
+    elif estimate is not None:
         speed, yaw_rate = estimate.speed, estimate.yaw_rate
         cov = estimate.pose_covariance
         pos_std = math.sqrt(max(0.0, float(cov[0, 0] + cov[1, 1])))

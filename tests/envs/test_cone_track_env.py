@@ -287,6 +287,20 @@ def test_autopilot_policy_drives_raw_localization_cautiously() -> None:
     assert kept.autopilot.config == given
 
 
+def test_uncertainty_before_the_filter_has_an_estimate() -> None:
+    """Vector mode: pos_std and yaw_std are their bounds (1000 m, pi) until the
+    EKF initialises, then its 1-sigma figures; 0 in truth and raw mode."""
+    env = ConeTrackEnv(localization="fused")
+    obs, _ = env.reset(seed=0)
+    assert_allclose(obs[4:6], [1e3, math.pi], rtol=1e-6)
+    while env.stack.estimate() is None:
+        obs, _, _, _, _ = env.step(np.zeros(2, dtype=np.float32))
+    assert 0.0 < obs[4] < 0.1 and 0.0 < obs[5] < 0.1
+    for mode in ("truth", "raw"):
+        obs, _ = ConeTrackEnv(localization=mode).reset(seed=0)
+        assert_allclose(obs[4:6], [0.0, 0.0])
+
+
 def test_dict_pose_in_every_localization_mode() -> None:
     """Dict mode's pose is what localization holds in every mode: the EKF's
     estimate (fused), the frame tree's last broadcast (raw, truth; truth
