@@ -10,7 +10,12 @@ Two projections, both vectorised over numpy arrays:
       z = 0
 
   and its exact algebraic inverse (``local_cartesian_to_gps``), which the
-  simulator uses to generate fixes so that truth and estimate agree.
+  simulator uses to generate fixes so that truth and estimate agree. One
+  departure from the seed: a longitude difference beyond +-180 deg (a track
+  across the antimeridian) is taken the short way round, and the inverse's
+  longitude is wrapped into [-180, 180] (the seed's formula put a fix 21 m
+  east of such an origin 38,000 km west); everywhere else the numbers are
+  the seed's bit for bit.
 
 * Exact WGS84 geodetic -> ECEF -> ENU (``geodetic_to_enu`` / ``enu_to_geodetic``),
   through pymap3d (a well-kept library; no reason to hand-write the ellipsoid
@@ -41,6 +46,10 @@ class GeodesyError(ValueError):
 
 
 def _check_lat_lon(lat: FloatArray, lon: FloatArray, where: str) -> None:
+    if lat.shape != lon.shape:
+        raise GeodesyError(
+            f"{where}: latitude and longitude must have one shape, got {lat.shape} and {lon.shape}"
+        )
     if not (np.all(np.isfinite(lat)) and np.all(np.isfinite(lon))):
         raise GeodesyError(f"{where}: latitude/longitude must be finite (got NaN or inf)")
     for name, values, limit in (("latitude", lat, 90.0), ("longitude", lon, 180.0)):
@@ -101,9 +110,29 @@ def gps_to_local_cartesian(
     _check_lat_lon(lat, lon, "gps_to_local_cartesian")
     lat_r, lon_r = np.radians(lat), np.radians(lon)
     ref_lat_r, ref_lon_r = math.radians(origin.lat_deg), math.radians(origin.lon_deg)
-    x = (lon_r - ref_lon_r) * math.cos(ref_lat_r) * R_EARTH
+    x = _wrapped(lon_r - ref_lon_r, math.pi) * math.cos(ref_lat_r) * R_EARTH
     y = (lat_r - ref_lat_r) * R_EARTH
     return x, y
+
+
+def _wrapped(values: FloatArray, half: float) -> FloatArray:
+    """``values`` moved into [-half, half] by a whole turn where they lie
+    beyond it (across the antimeridian), unchanged bit for bit elsewhere."""
+    turn = 2.0 * half
+    out: FloatArray = np.where(
+        values > half, values - turn, np.where(values < -half, values + turn, values)
+    )
+    return out
+
+
+def wrapped_lon_difference(d_lon_r: float) -> float:
+    """One longitude difference [rad] as :func:`gps_to_local_cartesian` takes
+    it (``_wrapped`` on a float): the short way round across the antimeridian."""
+    if d_lon_r > math.pi:
+        return d_lon_r - 2.0 * math.pi
+    if d_lon_r < -math.pi:
+        return d_lon_r + 2.0 * math.pi
+    return d_lon_r
 
 
 def local_cartesian_to_gps(
@@ -124,11 +153,15 @@ def local_cartesian_to_gps(
     """
     xa = np.asarray(x, dtype=float)
     ya = np.asarray(y, dtype=float)
+    if xa.shape != ya.shape:
+        raise GeodesyError(
+            f"local_cartesian_to_gps: x and y must have one shape, got {xa.shape} and {ya.shape}"
+        )
     if not (np.all(np.isfinite(xa)) and np.all(np.isfinite(ya))):
         raise GeodesyError("local_cartesian_to_gps: x/y must be finite (got NaN or inf)")
     ref_lat_r, ref_lon_r = math.radians(origin.lat_deg), math.radians(origin.lon_deg)
     lat = np.degrees(ya / R_EARTH + ref_lat_r)
-    lon = np.degrees(xa / (R_EARTH * math.cos(ref_lat_r)) + ref_lon_r)
+    lon = _wrapped(np.degrees(xa / (R_EARTH * math.cos(ref_lat_r)) + ref_lon_r), 180.0)
     _check_lat_lon(lat, lon, "local_cartesian_to_gps")
     return lat, lon
 

@@ -63,16 +63,32 @@ class GlobalPath:
     cov_threshold: float = COV_THRESHOLD_M2
 
     def __post_init__(self) -> None:
+        # Own read-only copies: the caller's arrays stay as they were.
+        for name in ("xy", "cov", "lat", "lon"):
+            array = np.array(getattr(self, name), dtype=float)
+            array.setflags(write=False)
+            object.__setattr__(self, name, array)
         n = len(self.xy)
-        if self.xy.shape != (n, 2) or self.cov.shape != (n,):
+        shapes = (self.xy.shape, self.cov.shape, self.lat.shape, self.lon.shape)
+        if shapes != ((n, 2), (n,), (n,), (n,)):
             raise GlobalPathError(
-                f"GlobalPath: xy must be (n, 2) and cov (n,), got {self.xy.shape} and "
-                f"{self.cov.shape}"
+                "GlobalPath: xy must be (n, 2) and cov, lat and lon (n,), got "
+                + ", ".join(str(shape) for shape in shapes)
             )
         if n < MIN_POINTS:
             raise GlobalPathError(f"GlobalPath: needs at least {MIN_POINTS} points, got {n}")
-        for array in (self.xy, self.cov, self.lat, self.lon):
-            array.setflags(write=False)
+        for name in ("xy", "cov", "lat", "lon"):
+            bad = np.flatnonzero(~np.isfinite(getattr(self, name)).reshape(n, -1).all(axis=1))
+            if len(bad):
+                raise GlobalPathError(f"GlobalPath: {name} of point {bad[0]} is not finite")
+        if np.any(self.cov < 0.0):
+            raise GlobalPathError(
+                f"GlobalPath: cov of point {int(np.argmax(self.cov < 0.0))} is negative"
+            )
+        step = np.hypot(*np.diff(self.xy, axis=0).T)
+        if np.any(step == 0.0):
+            k = int(np.argmax(step == 0.0)) + 1
+            raise GlobalPathError(f"GlobalPath: point {k} repeats the one before it")
 
     @property
     def high_covariance(self) -> NDArray[np.bool_]:
@@ -149,7 +165,9 @@ def global_path_from_centreline(
         origin: the `reference` origin.
         cov: per-point covariance [m^2], scalar or (n,).
     """
-    pts = np.asarray(xy, dtype=float).reshape(-1, 2)
+    pts = np.asarray(xy, dtype=float)
+    if pts.ndim != 2 or pts.shape[1] != 2:
+        raise GlobalPathError(f"global path: the centreline must be (n, 2) [m], got {pts.shape}")
     cov_a = np.broadcast_to(np.asarray(cov, dtype=float), (len(pts),)).copy()
     lat, lon = local_cartesian_to_gps(pts[:, 0], pts[:, 1], origin)
     return global_path_from_geodetic(lat, lon, cov_a, origin, closed=closed)

@@ -7,6 +7,7 @@ computes the equirectangular projection about the reference origin
     x = (lon_r - ref_lon_r) * cos(ref_lat_r) * R_EARTH
     y = (lat_r - ref_lat_r) * R_EARTH
 
+(the longitude difference taken the short way round across the antimeridian)
 and publishes a ``PointStamped`` with the fix's stamp and z = 0. The seed
 copies the whole header; here the stamp is kept and ``frame_id`` is set to
 ``reference``, the frame the seed says the point is in ("we treat this (x, y)
@@ -25,7 +26,13 @@ import logging
 import math
 from collections import Counter
 
-from localization.geodesy import DEFAULT_ORIGIN, R_EARTH, GeodesyError, ReferenceOrigin
+from localization.geodesy import (
+    DEFAULT_ORIGIN,
+    R_EARTH,
+    GeodesyError,
+    ReferenceOrigin,
+    wrapped_lon_difference,
+)
 from localization.geodesy import gps_to_local_cartesian as project
 from localization.messages import FRAME_REFERENCE, Header, NavSatFix, NavSatStatus, PointStamped
 
@@ -54,7 +61,7 @@ def gps_to_local_cartesian(
         # ``radians`` is the same single multiplication as ``math.radians``), without
         # its array overhead. NaN fails the range test and takes ``project``, which raises.
         ref_lat_r, ref_lon_r = math.radians(origin.lat_deg), math.radians(origin.lon_deg)
-        x = (math.radians(lon) - ref_lon_r) * math.cos(ref_lat_r) * R_EARTH
+        x = wrapped_lon_difference(math.radians(lon) - ref_lon_r) * math.cos(ref_lat_r) * R_EARTH
         y = (math.radians(lat) - ref_lat_r) * R_EARTH
     else:
         xs, ys = project(lat, lon, origin)

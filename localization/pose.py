@@ -65,15 +65,25 @@ class Pose2D:
         return np.array([self.x, self.y])
 
     def transform_points(self, points: ArrayLike) -> NDArray[np.float64]:
-        """Map (n, 2) points from this pose's frame into its parent frame [m]."""
-        p = np.asarray(points, dtype=float).reshape(-1, 2)
+        """Map (n, 2) points (or one, (2,)) from this pose's frame into its parent frame [m]."""
+        p = _points_2d(points, "transform_points")
         c, s = math.cos(self.yaw), math.sin(self.yaw)
         rot = np.array([[c, -s], [s, c]])
         return p @ rot.T + self.xy
 
     def inverse_transform_points(self, points: ArrayLike) -> NDArray[np.float64]:
-        """Map (n, 2) points from the parent frame into this pose's frame [m]."""
-        p = np.asarray(points, dtype=float).reshape(-1, 2) - self.xy
+        """Map (n, 2) points (or one, (2,)) from the parent frame into this pose's frame [m]."""
+        p = _points_2d(points, "inverse_transform_points") - self.xy
         c, s = math.cos(self.yaw), math.sin(self.yaw)
         rot = np.array([[c, -s], [s, c]])
         return p @ rot
+
+
+def _points_2d(points: ArrayLike, where: str) -> NDArray[np.float64]:
+    """``points`` as (n, 2) floats: (n, 2) as given, (2,) as one row; else a ValueError."""
+    p = np.asarray(points, dtype=float)
+    if p.shape == (2,):
+        return p.reshape(1, 2)
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise ValueError(f"Pose2D.{where}: points must be (n, 2) [m], got shape {p.shape}")
+    return p

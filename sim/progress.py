@@ -103,6 +103,12 @@ class PolylineProgress:
         lateral = float(t[0] * r[1] - t[1] * r[0])
         return Projection(float(self._s0[seg] + u[k]), lateral, seg, (float(t[0]), float(t[1])))
 
+    def point_at(self, index: int, s: float) -> tuple[float, float]:
+        """The point at arc length ``s`` [m] on segment ``index`` (a projection's foot)."""
+        sx, sy, tx, ty, _ = self._segments[index]
+        u = s - self._s0_list[index]
+        return sx + tx * u, sy + ty * u
+
     def restart_at(self, index: int) -> None:
         """Go on walking from segment ``index`` (as if the last answer had been there)."""
         if not 0 <= index < len(self._segments):

@@ -212,8 +212,13 @@ class RaceControl:
         """Whether the car with its CG at ``pose`` is off the track (all four
         footprint corners beyond one boundary), without recording anything:
         the pose is projected from scratch and the tracker's last segment,
-        where the next step's projection starts, is kept."""
-        _, lateral, index, tx, ty = self.progress.project_xy_anew(pose.x, pose.y)
+        where the next step's projection starts, is kept. The lateral offset
+        is the distance to the foot point, so that beyond either end of an
+        open centreline (or outside a corner) the car is not taken to be on a
+        track that has ended."""
+        s, lateral, index, tx, ty = self.progress.project_xy_anew(pose.x, pose.y)
+        fx, fy = self.progress.point_at(index, s)
+        lateral = math.copysign(max(abs(lateral), math.hypot(pose.x - fx, pose.y - fy)), lateral)
         return self._off(lateral, index, tx, ty, pose.yaw)
 
     def _off(self, lateral: float, index: int, tx: float, ty: float, yaw: float) -> bool:

@@ -54,6 +54,12 @@ class EkfConfig:
         history_window: how far back a late measurement is still applied [s].
         max_consecutive_gps_rejections: gated GPS fixes in a row after which
             the filter resets and initialises again [-].
+        max_stamp_jump: a message stamped more than this after the newest one
+            is rejected as too new (a clock glitch, e.g. a GPS-UTC leap-second
+            offset) [s].
+        clock_jump_messages: messages in a row rejected as too old or too new
+            after which the clock itself is taken to have jumped: the filter
+            resets and initialises again from the messages that follow [-].
         origin: geodetic origin of ``reference`` (fixes are projected about it).
         reference_frame: frame of positions and headings.
         antenna_frame: frame of the GPS, IMU and wheel-speed messages.
@@ -88,12 +94,20 @@ class EkfConfig:
     gate_probability: float = 0.999  # [-]
     history_window: float = 1.0  # [s]
     max_consecutive_gps_rejections: int = 20  # [-]
+    max_stamp_jump: float = 1.0  # [s]
+    clock_jump_messages: int = 10  # [-]: 0.1 s of the 100 Hz IMU alone
     origin: ReferenceOrigin = DEFAULT_ORIGIN
     reference_frame: str = FRAME_REFERENCE
     antenna_frame: str = FRAME_GPS_ANTENNA
 
     def __post_init__(self) -> None:
-        positive = ("imu_rate", "gps_bias_tau", "heading_bias_tau", "history_window")
+        positive = (
+            "imu_rate",
+            "gps_bias_tau",
+            "heading_bias_tau",
+            "history_window",
+            "max_stamp_jump",
+        )
         for name in positive:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
@@ -109,11 +123,11 @@ class EkfConfig:
                 f"EkfConfig.gate_probability = {self.gate_probability!r} is out of range: "
                 "allowed (0, 1)"
             )
-        if self.max_consecutive_gps_rejections < 1:
-            raise ValueError(
-                "EkfConfig.max_consecutive_gps_rejections = "
-                f"{self.max_consecutive_gps_rejections!r} is out of range: allowed >= 1"
-            )
+        for name in ("max_consecutive_gps_rejections", "clock_jump_messages"):
+            if getattr(self, name) < 1:
+                raise ValueError(
+                    f"EkfConfig.{name} = {getattr(self, name)!r} is out of range: allowed >= 1"
+                )
 
     @property
     def layout(self) -> StateLayout:

@@ -17,6 +17,11 @@ Each message goes through, in order:
 
 1. checks (:mod:`.measurements`): a NaN, a NO_FIX fix, a bad covariance or a
    wrong frame is rejected, counted and logged before it touches the state;
+   so is a message stamped more than ``max_stamp_jump`` after the newest one
+   (too new: a clock glitch would otherwise move the filter's time ahead and
+   make every later message too old). ``clock_jump_messages`` messages in a
+   row too old or too new mean the clock itself jumped (a restarted
+   simulation, a looped log): the filter resets and initialises again;
 2. initialisation, until a fix and a heading within ``init_sync_tolerance``
    of each other have arrived (then the state is set at the fix's stamp and
    the messages after it are replayed);
@@ -58,6 +63,7 @@ formulation (``tests/localization/test_ekf_regression.py``):
 from __future__ import annotations
 
 import logging
+import math
 from typing import Any
 
 import numpy as np
@@ -186,6 +192,7 @@ class FusionEkf:
         self._u = NO_IMU_INPUT
         self._u_cov = NO_IMU_COV
         self._gps_rejections_in_row = 0
+        self._stale_in_row = 0  # messages in a row rejected as too old or too new
         self._estimates: dict[float | None, tuple[Snapshot, Estimate]] = {}
 
     @property
@@ -224,6 +231,36 @@ class FusionEkf:
             return UpdateResult(err.sensor, err.stamp, False, err.reason)
         if meas is None:
             return None
+        result = self._too_new(meas) or self._take(meas)
+        stale = result.reason in (RejectReason.TOO_OLD, RejectReason.TOO_NEW)
+        self._stale_in_row = self._stale_in_row + 1 if stale else 0
+        if self._stale_in_row >= self.config.clock_jump_messages:
+            self._reset_because(
+                f"{self._stale_in_row} messages in a row too old or too new for the "
+                f"filter's time, the last stamped {meas.stamp:.6f} s: the clock jumped"
+            )
+        return result
+
+    def _reset_because(self, why: str) -> None:
+        """Log why, count the reset, and reset."""
+        _log.warning("%s; resetting the filter", why)
+        self._health.resets += 1
+        self.reset()
+
+    def _too_new(self, meas: Measurement) -> UpdateResult | None:
+        """Reject ``meas`` if it is stamped ``max_stamp_jump`` after the newest message."""
+        if self._history is not None:
+            newest = self.time
+        else:
+            newest = self._pending[-1].stamp if self._pending else None
+        if newest is None or meas.stamp <= newest + self.config.max_stamp_jump:
+            return None
+        detail = f"{meas.stamp - newest:.6g} s after the newest message ({newest!r} s)"
+        self._health.reject(meas.sensor, RejectReason.TOO_NEW, meas.stamp, detail)
+        return UpdateResult(meas.sensor, meas.stamp, False, RejectReason.TOO_NEW)
+
+    def _take(self, meas: Measurement) -> UpdateResult:
+        """Hold ``meas`` for initialisation, or apply it at its place in time."""
         history = self._history
         if history is None:
             return self._hold_for_init(meas)
@@ -232,13 +269,9 @@ class FusionEkf:
             self._replay_deferred()  # ``meas`` goes after them: they are needed now
         result = self._insert(meas, history)
         if self._gps_rejections_in_row >= self.config.max_consecutive_gps_rejections:
-            _log.warning(
-                "%d GPS fixes in a row gated at %.6f s: resetting the filter",
-                self._gps_rejections_in_row,
-                meas.stamp,
+            self._reset_because(
+                f"{self._gps_rejections_in_row} GPS fixes in a row gated at {meas.stamp:.6f} s"
             )
-            self._health.resets += 1
-            self.reset()
         return result
 
     def estimate(self, stamp: float | None = None) -> Estimate:
@@ -250,8 +283,10 @@ class FusionEkf:
 
         Raises:
             NotInitialisedError: before initialisation.
-            ValueError: ``stamp`` is older than the history.
+            ValueError: ``stamp`` is not finite or older than the history.
         """
+        if stamp is not None and not math.isfinite(stamp):
+            raise ValueError(f"FusionEkf.estimate: stamp must be finite [s], got {stamp!r}")
         history = self._history
         if history is None:
             raise NotInitialisedError("the EKF waits for a GPS fix and a heading")
@@ -275,7 +310,12 @@ class FusionEkf:
     # -- initialisation ----------------------------------------------------------------------
 
     def _hold_for_init(self, meas: Measurement) -> UpdateResult:
-        """Keep a message until a fix and a heading allow initialisation."""
+        """Keep a message until a fix and a heading allow initialisation
+        (one older than the window of those kept is rejected as too old)."""
+        if self._pending and meas.stamp < self._pending[-1].stamp - self.config.history_window:
+            detail = f"older than the messages held to initialise ({self._pending[0].stamp!r} s)"
+            self._health.reject(meas.sensor, RejectReason.TOO_OLD, meas.stamp, detail)
+            return UpdateResult(meas.sensor, meas.stamp, False, RejectReason.TOO_OLD)
         self._pending.append(meas)
         self._pending.sort(key=order_key)
         horizon = self._pending[-1].stamp - self.config.history_window

@@ -41,6 +41,7 @@ class RejectReason(StrEnum):
     BAD_COVARIANCE = "bad_covariance"  # negative, not symmetric, or not PSD
     WRONG_FRAME = "wrong_frame"  # header.frame_id is not the expected frame
     TOO_OLD = "too_old"  # stamped before the oldest state the history holds
+    TOO_NEW = "too_new"  # stamped more than max_stamp_jump after the newest message
     NIS_GATE = "nis_gate"  # Mahalanobis distance beyond the chi-square gate
 
 

@@ -59,6 +59,7 @@ from localization.frames.errors import (
     FrameTreeError,
     InvalidArgumentError,
     InvalidTransformError,
+    TransformError,
 )
 from localization.frames.rigid import Rigid
 from localization.frames.transform import (
@@ -262,10 +263,11 @@ class Buffer:
         return TransformStamped.from_rigid(chain.target, chain.source, used, a)
 
     def can_transform(self, target_frame: str, source_frame: str, time: float) -> bool:
-        """Whether :meth:`lookup_transform` would succeed (False instead of raising)."""
+        """Whether :meth:`lookup_transform` would succeed (False instead of raising,
+        also for an empty frame name or a NaN time, as tf2's ``canTransform``)."""
         try:
             self._resolve(target_frame, source_frame, time)
-        except (FrameNotFoundError, ConnectivityError, ExtrapolationError):
+        except TransformError:
             return False
         return True
 

@@ -368,6 +368,18 @@ def test_bad_start_pose_option_is_named(start: object) -> None:
     assert env.stack is before
 
 
+def test_a_start_pose_beyond_the_end_of_an_open_lane_is_off_the_track() -> None:
+    """On the acceleration lane's axis, 20 m behind its first point and
+    10,000 km past its last (0.0 m off its line, yet on no track), the car is
+    off the track; its own start pose is not."""
+    env = ConeTrackEnv(track="acceleration")
+    env.reset(seed=0)
+    for start in ((-20.0, 0.0, 0.0), (1.0e7, 0.0, 0.0)):
+        with pytest.raises(ValueError, match="puts the car off the track"):
+            env.reset(options={"start_pose": start})
+    env.reset(options={"start_pose": (-2.0, 0.0, 0.0)})
+
+
 def test_a_refused_reset_leaves_the_random_generator_as_it_was() -> None:
     """After a refused reset (an off-track start), reset() without a seed
     gives the episode it would have given."""
@@ -377,7 +389,7 @@ def test_a_refused_reset_leaves_the_random_generator_as_it_was() -> None:
     env.reset(seed=0)
     with pytest.raises(ValueError, match="off the"):
         env.reset(options={"start_pose": (0.0, 30.0, 0.0)})
-    with pytest.raises(ValueError, match="reset option start_pose"):
-        env.reset(seed=5, options={"start_pose": (1.0e7, 0.0, 0.0)})
+    with pytest.raises(ValueError, match=r"reset option start_pose.*latitude"):
+        env.reset(seed=5, options={"start_pose": (0.0, 1.0e8, 0.0)})  # beyond the pole
     again, _ = env.reset()
     assert np.array_equal(again, expected)

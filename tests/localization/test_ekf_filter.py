@@ -182,6 +182,8 @@ BAD_INPUT: list[tuple[str, Message, Sensor, RejectReason]] = [
     ("fix 50 m off", fix_message(2.5, 60.0, 20.0, 0.03), Sensor.GPS, RejectReason.NIS_GATE),
     ("fix before the history", fix_message(-5.0, 10.0, 20.0, GPS_SIGMA), Sensor.GPS,
      RejectReason.TOO_OLD),
+    ("imu 18 s ahead (a leap-second offset)", imu(3.0 + 18.0), Sensor.IMU,
+     RejectReason.TOO_NEW),
     ("heading NaN", heading(2.5, math.nan), Sensor.HEADING, RejectReason.NON_FINITE),
     ("heading inf variance", heading(2.5, 0.3, math.inf), Sensor.HEADING,
      RejectReason.NON_FINITE),
@@ -243,6 +245,55 @@ def test_repeated_gated_fixes_reset_the_filter() -> None:
     ekf.process(heading(1.1, 0.3))
     ekf.process(fix_message(1.1, 500.0, 20.0, 0.03))
     assert ekf.estimate().pose.x == pytest.approx(500.0)
+
+
+def test_one_message_from_the_future_leaves_the_fixes_in_use() -> None:
+    """An IMU sample stamped 18 s ahead is rejected as too new; the filter's
+    time stays, and the fixes that follow are applied, not rejected as too old."""
+    ekf = started(until=1.0)
+    assert ekf.process(imu(19.0)).reason == RejectReason.TOO_NEW  # type: ignore[union-attr]
+    assert ekf.time == 1.0
+    for k in range(1, 11):
+        ekf.process(imu(1.0 + k / 100))
+        if k % 5 == 0:
+            result = ekf.process(fix_message(1.0 + k / 100, 10.0, 20.0, GPS_SIGMA))
+            assert result is not None and result.accepted
+    assert ekf.health.count(RejectReason.TOO_OLD) == 0 and ekf.health.resets == 0
+
+
+@pytest.mark.parametrize("jump", [100.0, -10.0])
+def test_a_clock_jump_resets_the_filter(jump: float) -> None:
+    """All messages 100 s ahead (or 10 s back): the first clock_jump_messages
+    are rejected as too new (too old), then the filter resets and initialises
+    from the next fix and heading at the new time."""
+    ekf = started(EkfConfig(clock_jump_messages=5), until=1.0)
+    t0 = 1.0 + jump
+    reason = RejectReason.TOO_NEW if jump > 0 else RejectReason.TOO_OLD
+    for k in range(5):
+        assert ekf.process(imu(t0 + k / 100)).reason == reason  # type: ignore[union-attr]
+    assert ekf.health.resets == 1 and not ekf.initialised
+    ekf.process(heading(t0 + 0.05, 0.3))
+    ekf.process(fix_message(t0 + 0.05, 40.0, 20.0, GPS_SIGMA))
+    assert ekf.initialised and ekf.time == pytest.approx(t0 + 0.05)
+    assert ekf.estimate().pose.x == pytest.approx(40.0, abs=0.01)
+
+
+def test_a_message_from_the_future_before_initialisation() -> None:
+    """Held for initialisation, a message 50 s ahead of the others is rejected
+    (it would push them out of the window) and the filter still starts."""
+    ekf = FusionEkf()
+    ekf.process(heading(0.0, 0.3))
+    assert ekf.process(imu(50.0)).reason == RejectReason.TOO_NEW  # type: ignore[union-attr]
+    ekf.process(fix_message(0.05, 10.0, 20.0, GPS_SIGMA))
+    assert ekf.initialised and ekf.time == pytest.approx(0.05)
+
+
+def test_estimate_at_a_stamp_that_is_not_finite() -> None:
+    """estimate(nan) is a ValueError naming the stamp."""
+    ekf = started(until=0.5)
+    for stamp in (math.nan, math.inf):
+        with pytest.raises(ValueError, match="stamp must be finite"):
+            ekf.estimate(stamp)
 
 
 def test_estimate_ahead_and_in_the_past() -> None:

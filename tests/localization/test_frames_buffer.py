@@ -215,6 +215,9 @@ def test_can_transform() -> None:
     assert not buffer.can_transform("reference", "os_sensor", 2.0)
     assert not buffer.can_transform("reference", "missing", 1.0)
     assert not buffer.can_transform("reference", "island", 1.0)
+    # Invalid arguments answer False too, as tf2's canTransform does.
+    assert not buffer.can_transform("", "os_sensor", 1.0)
+    assert not buffer.can_transform("reference", "os_sensor", math.nan)
 
 
 def test_same_frame_is_identity() -> None:

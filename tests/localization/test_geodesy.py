@@ -126,6 +126,26 @@ def test_bad_lat_lon_rejected(lat: float, lon: float, message: str) -> None:
         gps_to_local_cartesian(lat, lon)
 
 
+def test_across_the_antimeridian_the_short_way_round() -> None:
+    """An origin 11 m west of the antimeridian (at the equator, 1 deg = 111,319.49 m
+    east): a fix 21 m east of it, past 180 deg, is x = 21 m, not 40,000 km west;
+    the inverse wraps the longitude back into [-180, 180]."""
+    metre = 360.0 / (2.0 * math.pi * R_EARTH)  # [deg] one metre east at the equator
+    origin = ReferenceOrigin(0.0, 180.0 - 11.0 * metre)
+    x, y = gps_to_local_cartesian(0.0, -180.0 + 10.0 * metre, origin)
+    assert_allclose([float(x), float(y)], [21.0, 0.0], atol=1e-6)
+    lat, lon = local_cartesian_to_gps(21.0, 0.0, origin)
+    assert_allclose([float(lat), float(lon)], [0.0, -180.0 + 10.0 * metre], atol=1e-9)
+
+
+def test_latitude_and_longitude_of_different_shapes_rejected() -> None:
+    """(3,) latitudes with (2,) longitudes: one GeodesyError naming both shapes."""
+    with pytest.raises(GeodesyError, match=r"one shape, got \(3,\) and \(2,\)"):
+        gps_to_local_cartesian([37.5, 37.5, 37.5], [127.0, 127.0])
+    with pytest.raises(GeodesyError, match="x and y must have one shape"):
+        local_cartesian_to_gps([1.0, 2.0], [1.0])
+
+
 def test_bad_origin_rejected() -> None:
     """An origin at the pole (cos(lat0) = 0) or out of range is refused."""
     with pytest.raises(GeodesyError, match="poles"):

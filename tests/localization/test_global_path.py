@@ -15,6 +15,7 @@ from numpy.testing import assert_allclose
 from localization.geodesy import DEFAULT_ORIGIN, local_cartesian_to_gps
 from localization.global_path import (
     COV_THRESHOLD_M2,
+    GlobalPath,
     GlobalPathError,
     global_path_findings,
     global_path_for_track,
@@ -154,3 +155,46 @@ def test_findings_against_the_track() -> None:
     x, y = xy[40]
     assert errors == [] and len(warnings) == 1
     assert f"1 of {len(xy)} points" in warnings[0] and f"({x:.1f}, {y:.1f})" in warnings[0]
+
+
+def test_global_path_copies_the_callers_arrays() -> None:
+    """The path's arrays are read-only copies: the caller's stay writeable and
+    changing them afterwards does not move the path."""
+    xy, cov = circle(), np.full(100, 1e-4)
+    lat, lon = local_cartesian_to_gps(xy[:, 0], xy[:, 1], DEFAULT_ORIGIN)
+    path = GlobalPath(xy=xy, cov=cov, lat=lat, lon=lon, closed=True)
+    assert xy.flags.writeable and cov.flags.writeable and lat.flags.writeable
+    xy[0, 0] = 99.0
+    assert path.xy[0, 0] == 20.0 and not path.xy.flags.writeable
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"xy_nan": 3}, "xy of point 3 is not finite"),
+        ({"repeat": 5}, "point 5 repeats the one before it"),
+        ({"cov": -1.0}, "cov of point 0 is negative"),
+        ({"lat_short": True}, r"lat and lon \(n,\)"),
+    ],
+)
+def test_global_path_rejects_what_no_path_can_be(change: dict[str, object], message: str) -> None:
+    """NaN points, a point repeated (a zero-length segment), a negative
+    covariance and lat/lon of another length are named, not met later deep in numpy."""
+    xy, cov = circle(), np.full(100, 1e-4)
+    lat, lon = local_cartesian_to_gps(xy[:, 0], xy[:, 1], DEFAULT_ORIGIN)
+    if "xy_nan" in change:
+        xy[3, 1] = np.nan
+    if "repeat" in change:
+        xy[5] = xy[4]
+    if "cov" in change:
+        cov[0] = -1.0
+    if "lat_short" in change:
+        lat = lat[:-1]
+    with pytest.raises(GlobalPathError, match=message):
+        GlobalPath(xy=xy, cov=cov, lat=lat, lon=lon, closed=True)
+
+
+def test_centreline_of_three_columns_rejected() -> None:
+    """An (n, 3) x, y, z array is refused by shape, not read as a zig-zag of (n * 3 / 2) points."""
+    with pytest.raises(GlobalPathError, match=r"must be \(n, 2\) \[m\], got \(4, 3\)"):
+        global_path_from_centreline(np.zeros((4, 3)), closed=False)
