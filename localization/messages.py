@@ -152,10 +152,17 @@ class ConeDetections:
         shape = np.shape(self.points)
         if len(shape) != 2 or shape[1] != 3:
             raise ValueError(f"ConeDetections.points must be (n, 3), got {shape}")
-        if self.colours is not None and len(self.colours) != shape[0]:
-            raise ValueError(
-                f"ConeDetections.colours has {len(self.colours)} labels for {shape[0]} points"
-            )
+        if self.colours is not None:
+            if len(self.colours) != shape[0]:
+                raise ValueError(
+                    f"ConeDetections.colours has {len(self.colours)} labels for {shape[0]} points"
+                )
+            unknown = set(self.colours).difference(CONE_COLOURS)
+            if unknown:
+                raise ValueError(
+                    f"ConeDetections.colours: unknown labels {sorted(unknown)}; "
+                    f"allowed: {list(CONE_COLOURS)}"
+                )
 
     def __len__(self) -> int:
         return int(np.shape(self.points)[0])

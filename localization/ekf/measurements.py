@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 from localization.ekf.config import EkfConfig
 from localization.ekf.health import RejectReason, Sensor
 from localization.ekf.model import wrap_yaw
+from localization.frames.transform import strip_leading_slash
 from localization.geodesy import GeodesyError
 from localization.gps_to_local import gps_to_local_cartesian
 from localization.messages import HeadingStamped, Imu, Message, NavSatFix, NavSatStatus, WheelSpeed
@@ -79,7 +80,7 @@ class Measurement:
 def _check_header(sensor: Sensor, stamp: float, frame_id: str, expected: str) -> None:
     if not math.isfinite(stamp):
         raise InvalidMessage(sensor, RejectReason.NON_FINITE, stamp, "stamp is not finite")
-    if frame_id != expected:
+    if frame_id != expected and strip_leading_slash(frame_id) != expected:  # tf2's names
         detail = f"frame_id {frame_id!r}, expected {expected!r}"
         raise InvalidMessage(sensor, RejectReason.WRONG_FRAME, stamp, detail)
 

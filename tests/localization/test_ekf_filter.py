@@ -288,6 +288,15 @@ def test_a_message_from_the_future_before_initialisation() -> None:
     assert ekf.initialised and ekf.time == pytest.approx(0.05)
 
 
+def test_a_frame_name_with_tf2s_leading_slash_is_the_same_frame() -> None:
+    """A fix in '/gps_antenna' is a fix in 'gps_antenna' (tf2 strips the slash)."""
+    ekf = started(until=0.5)
+    good = fix_message(0.5, 10.0, 20.0, GPS_SIGMA)
+    slashed = bad_fix(0.5, header=Header(0.5, "/" + good.header.frame_id))
+    result = ekf.process(slashed)
+    assert result is not None and result.accepted
+
+
 def test_estimate_at_a_stamp_that_is_not_finite() -> None:
     """estimate(nan) is a ValueError naming the stamp."""
     ekf = started(until=0.5)
