@@ -487,14 +487,40 @@ def partners_needed(  # noqa: PLR0917
 
 
 @_compiled
+def partner_points(points, side, offset, tangent, rows, width):  # noqa: PLR0917
+    """``virtual_partners``' new cones: (v, 2) points, (v,) sides and offsets.
+
+    The cones ``rows`` moved one ``width`` across the track, along the left
+    normal (-t_y, t_x) of their tangent, away from their own side: the
+    numpy version's ``points - (side * width) * normal`` and
+    ``offset - side * width``, element by element.
+    """
+    v = len(rows)
+    out = np.empty((v, 2))
+    out_side = np.empty(v, np.int8)
+    out_offset = np.empty(v)
+    for q in range(v):
+        i = rows[q]
+        across = side[i] * width
+        out[q, 0] = points[i, 0] - across * (tangent[i, 1] * -1.0)
+        out[q, 1] = points[i, 1] - across * (tangent[i, 0] * 1.0)
+        out_side[q] = -side[i]
+        out_offset[q] = offset[i] - across
+    return out, out_side, out_offset
+
+
+@_compiled
 def delaunay_edges(simplices, n):
     """Unique edges (e, 2), i < j, in the order of ``Delaunay.vertex_neighbor_vertices``.
 
     scipy builds each vertex's neighbour list by walking the simplices and
     their vertex pairs (j, k), appending k to j's list when not yet in it
     (``setlist.add``); the CSR rows are these lists. Rows in vertex order,
-    each keeping its neighbours above the vertex, give the edges.
+    each keeping its neighbours above the vertex, give the edges. Two points
+    (no simplices) give their one edge.
     """
+    if n == 2 and simplices.shape[0] == 0:
+        return np.array([[0, 1]], dtype=np.intp)
     count = np.zeros(n, np.intp)
     cap = 16  # a Delaunay vertex has 6 neighbours on average
     lists = np.empty((n, cap), np.intp)
@@ -660,6 +686,8 @@ def chain_nearest(  # noqa: PLR0917
 
     Each step goes to the nearest unvisited allowed midpoint, the first index
     of equals: the first unvisited one in a stable ``argsort`` of the row.
+    The station advance is tested first: a midpoint it rules out needs no
+    distance (the same choice, fewer ``np.hypot``).
     """
     m = len(station)
     visited = np.zeros(m, np.bool_)
@@ -676,12 +704,12 @@ def chain_nearest(  # noqa: PLR0917
         for j in range(m):
             if visited[j]:
                 continue
-            d = np.hypot(cx - midpoints[j, 0], cy - midpoints[j, 1])
             advance = _wrap(station[j] - station[current], length, closed)
+            if not (advance <= max_station_step and advance >= -back_tolerance):
+                continue  # not allowed whatever the distance: skip the hypot
+            d = np.hypot(cx - midpoints[j, 0], cy - midpoints[j, 1])
             if (
                 d <= max_step
-                and advance <= max_station_step
-                and advance >= -back_tolerance
                 and advance >= min_advance * d
                 and d < math.inf
                 and (nxt < 0 or d < step)

@@ -30,6 +30,12 @@ bridges, the ordering, the spline's sampling, step 6's crossing test, which
 only examines the path segments that straddle a boundary edge's line, and
 the speed profile), with the numbers of the numpy code they replaced
 (``tests/planner/test_kernels.py``). Step 3's triangulation is scipy's.
+``reference_path_planning`` runs the compiled steps between two scipy calls
+in one call each (``planner.fused``: steps 2 and 3a in
+``cones_with_partners``, steps 3 and 4 after the triangulation in
+``bridges_and_midpoints``), with each config's settings gathered once
+(``MidlineConfig.view_settings`` ...): the same numbers, without a call,
+a wrapper and a dataclass per step (``tests/planner/test_fused.py``).
 """
 
 from __future__ import annotations
@@ -43,23 +49,19 @@ from numpy.typing import NDArray
 
 from localization.frames import LATEST, Buffer, TransformError
 from localization.messages import FRAME_OS_SENSOR, Header
-from planner import kernels
+from planner import fused, kernels
 from planner.bridges import (
     Bridges,
     ConeSet,
     PairTable,
     TrackEstimate,
-    boundary_edges,
-    delaunay_edges,
-    find_bridges,
+    delaunay_simplices,
     track_estimate,
-    virtual_partners,
 )
 from planner.classify import LEFT, RIGHT, ClassifiedCones
 from planner.config import MidlineConfig, SpeedProfileConfig
 from planner.geometry import FloatArray, arc_length
 from planner.messages import BridgeLines, LocalPath, Midpoints, Waypoints
-from planner.ordering import ordered_midpoints
 from planner.speed_profile import speed_profile
 from planner.spline import fit_path
 
@@ -209,21 +211,89 @@ def boundary_cones(
         cones.station,
         axis.length,
         axis.closed,
-        config.min_x,
-        config.max_range,
-        config.min_boundary_offset,
-        config.max_boundary_offset,
-        config.max_station_gap,
-        config.min_track_width,
-        config.max_track_width,
-        config.max_bridge_length,
-        config.min_width_samples,
-        config.boundary_tolerance,
+        *config.view_settings,
     )
     real = cones if len(keep) == len(cones) else cones.select(keep)
     pairs = PairTable(left, right, dist, same, span, middle)
     track = track_estimate(width, centre, measured, config)
     return real, pairs, track, len(cones) - len(real)
+
+
+def cones_with_partners(
+    cones: ConeSet, config: MidlineConfig
+) -> tuple[ConeSet, TrackEstimate, int]:
+    """Steps 2 and 3a in one compiled call (``fused.plan_cones``).
+
+    ``boundary_cones``, then ``virtual_partners`` joined after the kept
+    cones: the same cones, estimate and count, without the pair table.
+
+    Returns:
+        The kept cones followed by their virtual partners, the width and
+        middle in view, and how many cones were dropped.
+    """
+    axis = cones.axis
+    points, side, offset, station, tangent, virtual, width, centre, measured, dropped = (
+        fused.plan_cones(
+            cones.points,
+            cones.side,
+            cones.offset,
+            cones.station,
+            cones.tangent,
+            axis.length,
+            axis.closed,
+            config.view_settings,
+            config.partner_settings,
+        )
+    )
+    cone_set = ConeSet(points, side, offset, station, tangent, virtual, axis)
+    return cone_set, TrackEstimate(float(width), float(centre), bool(measured)), int(dropped)
+
+
+def bridges_and_midpoints(
+    cones: ConeSet,
+    simplices: NDArray[np.intc],
+    config: MidlineConfig,
+    track: TrackEstimate,
+    sensor_station: float,
+) -> tuple[Bridges, FloatArray, FloatArray, float]:
+    """Steps 3 and 4 after the triangulation, in one compiled call (``fused.plan_midpoints``).
+
+    ``find_bridges`` on the triangulation's edges, ``ordered_midpoints``, and
+    the boundary edges as segments.
+
+    Args:
+        cones: real and virtual cones.
+        simplices: (t, 3) their Delaunay triangles (``bridges.delaunay_simplices``).
+        config: the settings.
+        track: the width in view (checked when measured).
+        sensor_station: the sensor's station [m].
+
+    Returns:
+        The bridges, the (e, 2, 2) boundary segments [m], the (m, 2) ordered
+        midpoints [m] and their polyline's length [m].
+    """
+    axis = cones.axis
+    left, right, length, valid, used, mid, station, boundary, ordered, ordered_length = (
+        fused.plan_midpoints(
+            simplices,
+            cones.points,
+            cones.side,
+            cones.offset,
+            cones.station,
+            cones.virtual,
+            axis.length,
+            axis.closed,
+            config.bridge_settings,
+            track.measured,
+            track.width,
+            config.width_tolerance,
+            config.bridge_selection == "shortest",
+            sensor_station,
+            config.ordering_settings,
+        )
+    )
+    bridges = Bridges(left, right, length, valid, used, mid, station)
+    return bridges, boundary, ordered, float(ordered_length)
 
 
 def check_path(
@@ -321,13 +391,11 @@ def reference_path_planning(
     """
     config = config or _DEFAULT_CONFIG
     all_cones, stamp = cones_to_sensor(cones, buffer, time, sensor_frame)
-    real, pairs, track, dropped = boundary_cones(all_cones, config)
-    cone_set = real.join(virtual_partners(real, pairs, config, track))
-    edges = delaunay_edges(cone_set.points)
-    bridges = find_bridges(cone_set, edges, config, track)
-    midpoints = ordered_midpoints(bridges, cones.sensor_station, cones.axis, config)
-    path = fit_path(midpoints, config)
-    boundary = cone_set.points.take(boundary_edges(cone_set, edges, config), axis=0)
+    cone_set, track, dropped = cones_with_partners(all_cones, config)
+    bridges, boundary, midpoints, midpoints_length = bridges_and_midpoints(
+        cone_set, delaunay_simplices(cone_set.points), config, track, cones.sensor_station
+    )
+    path = fit_path(midpoints, config, midpoints_length)
     s = arc_length(path)  # for the check and the speed profile
     reason = check_path(path, len(midpoints), boundary, config, float(s[-1]))
     status = PlanStatus.OK
