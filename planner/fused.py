@@ -15,6 +15,8 @@ that tests can call alone.
   the width is not measured (``bridges.track_estimate``), and step 3's virtual
   partners (``kernels.partners_needed``, ``kernels.partner_points``), joined
   after the real cones.
+- ``project_around`` (classification): the window's origin, the window's
+  test and the search with its projections (``PathProjector.project_around``).
 - ``plan_midpoints``: after the triangulation, step 3's edges and bridges
   (``kernels.delaunay_edges``, ``kernels.find_bridges``), step 4's ordering
   (``kernels.ordered_midpoints``) and the boundary edges step 6 checks against
@@ -177,3 +179,56 @@ def plan_midpoints(  # noqa: PLR0917
     )
     path_length = kernels.arc_length(ordered)[-1]
     return left, right, size, valid, used, mid, mid_station, boundary, ordered, path_length
+
+
+@_compiled
+def project_around(  # noqa: PLR0917
+    points, table, blocks, size, back, ahead, penalty, has_centre, centre, length, closed, half_max
+):  # fmt: skip
+    """``PathProjector.project_around`` in one call: the window's origin, the window, the search.
+
+    Without ``has_centre`` the origin is the last point's station on the
+    whole path (``kernels.nearest_segments`` and ``kernels.project_rows`` on
+    that point); the window [origin - back, origin + ahead] applies when
+    ``penalty > 0`` and a segment overlaps it (``kernels.window_overlaps``);
+    then every point's search and projection.
+
+    Args:
+        points: (n, 2) [m], n >= 1, C-contiguous; the last is the origin's point.
+        table: the projector's (k, 9) segment table.
+        blocks: its (b, 3) bounding circles of ``size`` segments each.
+        back: the window starts this far behind the origin [m] ...
+        ahead: ... and ends this far ahead [m].
+        penalty: added to segments outside the window [m]; <= 0: no window.
+        has_centre: whether ``centre`` is the origin's station.
+        centre: the origin's station [m] (read when ``has_centre``).
+        length: the path's length [m].
+        closed: whether stations wrap.
+        half_max: half the longest segment [m].
+
+    Returns:
+        ``kernels.nearest_segments``' segments, then ``kernels.project_rows``'
+        foot, station, offset, tangent and distance.
+    """
+    windowed = False
+    middle = 0.0
+    half = 0.0
+    if penalty > 0.0:
+        if not has_centre:
+            last = points[-1:]
+            seg, t, d2 = kernels.nearest_segments(
+                last, table, blocks, size, False, 0.0, 0.0, 0.0, length, closed
+            )
+            centre = kernels.project_rows(last, seg, t, d2, table)[1][0]
+        lo = centre - back
+        hi = centre + ahead
+        windowed = kernels.window_overlaps(lo, hi, table, length, closed, half_max)
+        if windowed:
+            middle = 0.5 * (lo + hi)
+            half = 0.5 * (hi - lo)
+    seg, t, d2 = kernels.nearest_segments(
+        points, table, blocks, size, windowed, middle, half, penalty if windowed else 0.0,
+        length, closed,
+    )  # fmt: skip
+    foot, station, offset, tangent, distance = kernels.project_rows(points, seg, t, d2, table)
+    return seg, foot, station, offset, tangent, distance

@@ -224,6 +224,28 @@ def project_rows(p, seg, t, d2, table):
 
 
 @_compiled
+def window_overlaps(lo, hi, table, length, closed, half_max):  # noqa: PLR0917
+    """``PathProjector._preference``'s test: some segment overlaps stations [lo, hi] [m].
+
+    Where the segments tile the window (on a closed path, or well inside an
+    open one, and wider than ``half_max``, half the longest segment) without
+    looking; otherwise ``window_mask(lo, hi).any()``: a segment whose
+    mid-station lies within the window's half width plus its half length
+    of the window's middle (``station_difference``'s wrap).
+    """
+    inside = closed or (lo < length - half_max and hi > half_max)
+    if inside and hi - lo > half_max:
+        return True
+    centre = 0.5 * (lo + hi)
+    half = 0.5 * (hi - lo)
+    for s in range(table.shape[0]):
+        reach = half + table[s, _HALF_LENGTH]
+        if abs(_wrap(table[s, _MID_STATION] - centre, length, closed)) <= reach:
+            return True
+    return False
+
+
+@_compiled
 def in_view(  # noqa: PLR0917
     points, offset, min_x, max_range, min_offset, max_offset
 ):

@@ -687,8 +687,8 @@ for pilot in pilots:
         ok += plan is not None and plan.status is PlanStatus.OK
 assert ok > 30, ok
 assert loaded() == after_warm_up, (after_warm_up, loaded())
-assert {"profile_limits", "profile_passes", "spline_path", "nearest_segments", "plan_cones",
-        "plan_midpoints"} <= set(loaded())
+assert {"profile_limits", "profile_passes", "spline_path", "project_around", "plan_cones",
+        "plan_midpoints", "window_overlaps"} <= set(loaded())
 print("ok")
 """
     run_child(script)
