@@ -92,6 +92,25 @@ def _mid2(px, py, table, s):
 
 
 @_compiled
+def _beyond(best, windowed):
+    """A squared distance above which a segment cannot score ``best`` or less.
+
+    Without a window the score is the squared distance: ``best``. With one it
+    is ``sqrt(d2)`` plus a penalty >= 0, which rounds to no less than
+    ``sqrt(d2)``; ``d2 > (best (1 + 2^-40))^2`` (each product rounded) gives
+    ``sqrt(d2) > best`` with room for the roundings, so the search skips the
+    square root of such a segment, and its choice is the same. inf (no skip)
+    for a best so small that its square could underflow.
+    """
+    if not windowed:
+        return best
+    if not best > 1e-100:
+        return math.inf
+    b = best * (1.0 + 2.0**-40)
+    return b * b
+
+
+@_compiled
 def nearest_segments(  # noqa: PLR0917
     p, table, blocks, size, windowed, centre, half, penalty, length, closed
 ):
@@ -110,7 +129,8 @@ def nearest_segments(  # noqa: PLR0917
     bound exceeds the best score so far (plus 1e-9 m for rounding); then,
     with a window, the other blocks only if the best score reaches
     ``penalty`` (their segments all score at least that). Exact: a skipped
-    segment cannot score as low as the best.
+    segment cannot score as low as the best; nor can a segment whose squared
+    distance exceeds ``_beyond(best)``, whose score is not computed.
     """
     n = len(p)
     n_seg = table.shape[0]
@@ -134,6 +154,7 @@ def nearest_segments(  # noqa: PLR0917
         px = p[i, 0]
         py = p[i, 1]
         best = math.inf
+        beyond = math.inf
         best_seg = -1
         first = -1
         low = math.inf
@@ -181,6 +202,8 @@ def nearest_segments(  # noqa: PLR0917
                     gx = rx - t * sdx
                     gy = ry - t * sdy
                     d2 = gx * gx + gy * gy
+                    if d2 > beyond:  # sqrt(d2) > best: neither better nor a tie
+                        continue
                     score = math.sqrt(d2) + cost[s] if windowed else d2
                     better = score < best or best_seg < 0
                     if not better and score == best:
@@ -193,6 +216,7 @@ def nearest_segments(  # noqa: PLR0917
                         seg[i] = s
                         t_best[i] = t
                         d2_best[i] = d2
+                        beyond = _beyond(best, windowed)
     return seg, t_best, d2_best
 
 
@@ -532,26 +556,21 @@ def partner_points(points, side, offset, tangent, rows, width):  # noqa: PLR0917
 
 
 @_compiled
-def delaunay_edges(simplices, n):
-    """Unique edges (e, 2), i < j, in the order of ``Delaunay.vertex_neighbor_vertices``.
+def _upper_neighbours(simplices, n, cap):
+    """Each vertex's neighbours above it, in the order scipy's lists meet them.
 
-    scipy builds each vertex's neighbour list by walking the simplices and
-    their vertex pairs (j, k), appending k to j's list when not yet in it
-    (``setlist.add``); the CSR rows are these lists. Rows in vertex order,
-    each keeping its neighbours above the vertex, give the edges. Two points
-    (no simplices) give their one edge.
+    Returns:
+        (n,) counts and the (n, cap) lists; False when a vertex has more than
+        ``cap`` (the lists are then incomplete: call again with a larger cap).
     """
-    if n == 2 and simplices.shape[0] == 0:
-        return np.array([[0, 1]], dtype=np.intp)
     count = np.zeros(n, np.intp)
-    cap = 16  # a Delaunay vertex has 6 neighbours on average
     lists = np.empty((n, cap), np.intp)
     for i in range(simplices.shape[0]):
         for j in range(3):
             u = simplices[i, j]
             for k in range(3):
                 v = simplices[i, k]
-                if u == v:
+                if v <= u:
                     continue
                 found = False
                 for q in range(count[u]):
@@ -559,27 +578,39 @@ def delaunay_edges(simplices, n):
                         found = True
                         break
                 if not found:
-                    if count[u] == cap:  # grow (a vertex with many neighbours)
-                        cap *= 2
-                        bigger = np.empty((n, cap), np.intp)
-                        bigger[:, : lists.shape[1]] = lists
-                        lists = bigger
+                    if count[u] == cap:
+                        return count, lists, False
                     lists[u, count[u]] = v
                     count[u] += 1
+    return count, lists, True
+
+
+@_compiled
+def delaunay_edges(simplices, n):
+    """Unique edges (e, 2), i < j, in the order of ``Delaunay.vertex_neighbor_vertices``.
+
+    scipy builds each vertex's neighbour list by walking the simplices and
+    their vertex pairs (j, k), appending k to j's list when not yet in it
+    (``setlist.add``); the CSR rows are these lists. Rows in vertex order,
+    each keeping its neighbours above the vertex, give the edges. Only the
+    neighbours above are kept (``_upper_neighbours``): leaving the others
+    out changes neither which ones above are met first nor their order.
+    Two points (no simplices) give their one edge.
+    """
+    if n == 2 and simplices.shape[0] == 0:
+        return np.array([[0, 1]], dtype=np.intp)
+    cap = 8  # a Delaunay vertex has 6 neighbours on average, 3 above it
+    count, lists, complete = _upper_neighbours(simplices, n, cap)
+    while not complete:  # a vertex with many neighbours
+        cap *= 2
+        count, lists, complete = _upper_neighbours(simplices, n, cap)
+    edges = np.empty((count.sum(), 2), np.intp)
     e = 0
     for u in range(n):
         for q in range(count[u]):
-            if u < lists[u, q]:
-                e += 1
-    edges = np.empty((e, 2), np.intp)
-    e = 0
-    for u in range(n):
-        for q in range(count[u]):
-            v = lists[u, q]
-            if u < v:
-                edges[e, 0] = u
-                edges[e, 1] = v
-                e += 1
+            edges[e, 0] = u
+            edges[e, 1] = lists[u, q]
+            e += 1
     return edges
 
 

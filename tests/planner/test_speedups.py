@@ -180,8 +180,12 @@ def test_cone_set_select_and_join() -> None:
 def test_delaunay_edges_in_scipy_neighbour_order() -> None:
     """Each vertex's neighbours j > i, in ``vertex_neighbor_vertices`` order."""
     rng = np.random.default_rng(7)
-    for n in (3, 10, 40):
-        points = rng.uniform(0.0, 30.0, (n, 2))
+    angle = np.linspace(0.0, 2.0 * np.pi, 40, endpoint=False)
+    fan = np.vstack([[0.0, 0.0], np.column_stack([np.cos(angle), np.sin(angle)])])
+    samples = [rng.uniform(0.0, 30.0, (n, 2)) for n in (3, 10, 40)]
+    # A vertex with 40 neighbours above it: the lists' capacity grows (twice).
+    for points in [*samples, fan + rng.normal(0.0, 1e-3, fan.shape)]:
+        n = len(points)
         indptr, indices = Delaunay(points).vertex_neighbor_vertices
         rows = np.repeat(np.arange(n), np.diff(indptr))
         keep = rows < indices
