@@ -325,6 +325,35 @@ class SpeedProfileConfig(Settings):
         _check("SpeedProfileConfig", "jerk_window", self.jerk_window, 0.0)
         _check("SpeedProfileConfig", "curvature_window", self.curvature_window, 0.0)
 
+    # The limits as the compiled profile (``planner.kernels``) takes them, in
+    # its order and as floats, gathered once per settings object.
+
+    @cached_property
+    def limit_settings(self) -> tuple[float, ...]:
+        """``kernels.profile_limits``' settings: curvature window, lateral limits, the
+        ``v_max`` floor of the curvature, ``v_max``, the jerk limit and its window."""
+        return (
+            float(self.curvature_window),
+            float(self.a_lat_max),
+            float(self.a_lat_aero),
+            self.a_lat_max / self.v_max**2,  # as curvature_limit's floor
+            float(self.v_max),
+            float(self.lateral_jerk_max),
+            float(self.jerk_window),
+        )
+
+    @cached_property
+    def pass_settings(self) -> tuple[bool, float, float, float, float, bool]:
+        """``kernels.profile_passes``' settings: ellipse, drive, brake, lateral limits, stop."""
+        return (
+            bool(self.friction_ellipse),
+            float(self.a_drive),
+            float(self.a_brake),
+            float(self.a_lat_max),
+            float(self.a_lat_aero),
+            bool(self.horizon_stop),
+        )
+
 
 @dataclass(frozen=True)
 class PurePursuitConfig(Settings):

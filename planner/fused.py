@@ -21,6 +21,10 @@ that tests can call alone.
   (``kernels.delaunay_edges``, ``kernels.find_bridges``), step 4's ordering
   (``kernels.ordered_midpoints``) and the boundary edges step 6 checks against
   (``kernels.boundary_edges``, gathered into segments).
+- ``check_and_limit``: after the spline, step 6's arc length and crossing
+  test (``kernels.arc_length``, ``kernels.crosses_boundary``) and step 7's
+  speed limits (``kernels.profile_limits``; the cube root and the passes
+  follow in ``speed_profile.profile_speeds``).
 
 The arguments are plain arrays and scalars (``kernels``' conventions); the
 callers are in ``midline``. Compiled with numba's on-disk cache like
@@ -232,3 +236,27 @@ def project_around(  # noqa: PLR0917
     )  # fmt: skip
     foot, station, offset, tangent, distance = kernels.project_rows(points, seg, t, d2, table)
     return seg, foot, station, offset, tangent, distance
+
+
+@_compiled
+def check_and_limit(path, boundary, profile, limits):
+    """Step 6's arc length and crossing test, and step 7's limits, for a fresh path.
+
+    Args:
+        path: (p, 2) the fitted path [m], C-contiguous.
+        boundary: (e, 2, 2) the boundary segments it may not cross [m].
+        profile: whether to compute the speed profile's limits.
+        limits: ``kernels.profile_limits``' settings
+            (``SpeedProfileConfig.limit_settings``).
+
+    Returns:
+        The arc length (max(p, 1),) [m] (``kernels.arc_length``), whether the
+        path crosses a boundary segment (``kernels.crosses_boundary``), and
+        ``kernels.profile_limits``' (s, kappa, v, ratio) given that arc length
+        (the arc length four times, unread, without ``profile`` or points).
+    """
+    s = kernels.arc_length(path)
+    crosses = kernels.crosses_boundary(path, boundary)
+    if profile and len(path) > 0:
+        return s, crosses, kernels.profile_limits(path, s, True, *limits)
+    return s, crosses, (s, s, s, s)

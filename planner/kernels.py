@@ -248,6 +248,43 @@ def project_rows(p, seg, t, d2, table):
 
 
 @_compiled
+def ground_points(points):
+    """``classify``'s ground points: the rows with finite x and y, then the origin.
+
+    Args:
+        points: (n, >= 2) detections; x and y are the first two columns.
+
+    Returns:
+        (k + 1, 2) the finite rows' x and y followed by (0, 0), and the (n,)
+        mask of the finite rows (``numpy.isfinite`` of x and y, both).
+    """
+    n = len(points)
+    finite = np.empty(n, np.bool_)
+    k = 0
+    for i in range(n):
+        finite[i] = math.isfinite(points[i, 0]) and math.isfinite(points[i, 1])
+        if finite[i]:
+            k += 1
+    ground = np.zeros((k + 1, 2))
+    k = 0
+    for i in range(n):
+        if finite[i]:
+            ground[k, 0] = points[i, 0]
+            ground[k, 1] = points[i, 1]
+            k += 1
+    return ground, finite
+
+
+@_compiled
+def side_of_path(offset):
+    """``classify.side_of_path``: (n,) int8, +1 where the offset is > 0, else -1."""
+    side = np.empty(len(offset), np.int8)
+    for i in range(len(offset)):
+        side[i] = 1 if offset[i] > 0.0 else -1
+    return side
+
+
+@_compiled
 def window_overlaps(lo, hi, table, length, closed, half_max):  # noqa: PLR0917
     """``PathProjector._preference``'s test: some segment overlaps stations [lo, hi] [m].
 

@@ -62,13 +62,14 @@ from planner.classify import LEFT, RIGHT, ClassifiedCones
 from planner.config import MidlineConfig, SpeedProfileConfig
 from planner.geometry import FloatArray, arc_length
 from planner.messages import BridgeLines, LocalPath, Midpoints, Waypoints
-from planner.speed_profile import speed_profile
+from planner.speed_profile import profile_speeds, speed_profile
 from planner.spline import fit_path
 
 SpeedFn = Callable[[FloatArray, "FloatArray | None"], FloatArray]
 """``speeds(path, s)``: the waypoints' speeds for a path and its arc length (or None)."""
 
 _DEFAULT_CONFIG = MidlineConfig()  # frozen: built once
+_DEFAULT_SPEED = SpeedProfileConfig()
 
 
 class PlanStatus(StrEnum):
@@ -302,6 +303,8 @@ def check_path(
     boundary: FloatArray,
     config: MidlineConfig,
     length: float | None = None,
+    *,
+    crosses: bool | None = None,
 ) -> str:
     """Step 6: why the path is not sound, or "" when it is.
 
@@ -311,6 +314,8 @@ def check_path(
         boundary: (e, 2, 2) boundary edges it may not cross [m].
         config: the thresholds.
         length: the path's length [m] if known (``arc_length(path)[-1]``).
+        crosses: whether it crosses a boundary edge, if known
+            (``kernels.crosses_boundary(path, boundary)``).
     """
     if n_midpoints < 2:
         return f"{n_midpoints} ordered midpoints (need 2)"
@@ -321,7 +326,9 @@ def check_path(
     start = float(np.hypot(path[0, 0], path[0, 1]))
     if start > config.max_start_distance:
         return f"path starts {start:.2f} m away (max {config.max_start_distance} m)"
-    if kernels.crosses_boundary(path, boundary):  # polyline_crosses, compiled
+    if crosses is None:
+        crosses = bool(kernels.crosses_boundary(path, boundary))  # polyline_crosses, compiled
+    if crosses:
         return "path crosses a track boundary"
     return ""
 
@@ -395,27 +402,33 @@ def reference_path_planning(
     bridges, boundary, midpoints, midpoints_length = bridges_and_midpoints(
         cone_set, delaunay_simplices(cone_set.points), config, track, cones.sensor_station
     )
-    path = fit_path(midpoints, config, midpoints_length)
-    s = arc_length(path)  # for the check and the speed profile
-    reason = check_path(path, len(midpoints), boundary, config, float(s[-1]))
+    path = np.ascontiguousarray(fit_path(midpoints, config, midpoints_length), dtype=float)
+    # The arc length for the check and the speed profile, the crossing test
+    # and the profile's limits: one compiled call.
+    s, crosses, limits = fused.check_and_limit(
+        path, boundary, speeds is None, (speed_config or _DEFAULT_SPEED).limit_settings
+    )
+    reason = check_path(path, len(midpoints), boundary, config, float(s[-1]), crosses=crosses)
     status = PlanStatus.OK
-    path_s: FloatArray | None = s
     if reason:
         carried = carry_path_forward(previous, buffer, stamp, cones.header.frame_id, sensor_frame)
         status = PlanStatus.FAILED if carried is None else PlanStatus.FALLBACK
         path = np.zeros((0, 2)) if carried is None else carried
-        path_s = None
+        if speeds is None:
+            path_speeds = speed_profile(path, speed_config, v_start)
+        else:
+            path_speeds = speeds(path, None)
+    elif speeds is None:
+        path_speeds = profile_speeds(limits, speed_config, v_start)
+    else:
+        path_speeds = speeds(path, s)
     return LocalPlan(
         header=Header(stamp, sensor_frame),
         cones=cone_set,
         bridges=bridges,
         midpoints=midpoints,
         path=path,
-        speeds=(
-            speed_profile(path, speed_config, v_start, s=path_s)
-            if speeds is None
-            else speeds(path, path_s)
-        ),
+        speeds=path_speeds,
         status=status,
         reason=reason,
         track=track,

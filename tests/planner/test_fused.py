@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
 from numpy.testing import assert_array_equal
 
-from planner import MidlineConfig, kernels
+from planner import MidlineConfig, SpeedProfileConfig, fused, kernels
 from planner.bridges import (
     ConeSet,
     boundary_edges,
@@ -21,6 +22,7 @@ from planner.bridges import (
 from planner.geometry import arc_length
 from planner.midline import boundary_cones, bridges_and_midpoints, cones_with_partners
 from planner.ordering import ordered_midpoints
+from planner.speed_profile import profile_speeds, speed_profile
 from tests.planner.test_kernels import random_cones, ref_track
 
 
@@ -85,3 +87,27 @@ def test_no_cones_in_view() -> None:
     assert (len(got), track.measured, dropped) == (0, False, 0)
     assert len(pair_table(got, MidlineConfig()).left) == 0
     assert track == ref_track(got, MidlineConfig())
+
+
+@pytest.mark.parametrize("profile", [True, False])
+def test_check_and_limit_is_the_steps(profile: bool) -> None:
+    """``fused.check_and_limit`` and ``profile_speeds``: the arc length, the crossing
+    test and ``speed_profile``'s speeds, for paths that cross the boundary and not."""
+    rng = np.random.default_rng(43)
+    configs = [
+        SpeedProfileConfig(),
+        SpeedProfileConfig(friction_ellipse=False, lateral_jerk_max=math.inf),
+        SpeedProfileConfig(horizon_stop=False, curvature_window=0.0),
+    ]
+    for trial in range(60):
+        n = int(rng.integers(1, 60))
+        path = np.cumsum(rng.normal(0.5, 0.2, (n, 2)), axis=0)
+        boundary = rng.uniform(-5.0, 30.0, (int(rng.integers(0, 8)), 2, 2))
+        config = configs[trial % len(configs)]
+        s, crosses, limits = fused.check_and_limit(path, boundary, profile, config.limit_settings)
+        assert_array_equal(s, arc_length(path))
+        assert crosses == kernels.crosses_boundary(path, boundary)
+        if profile:
+            v_start = None if trial % 2 else float(rng.uniform(0.0, 10.0))
+            got = profile_speeds(limits, config, v_start)
+            assert_array_equal(got, speed_profile(path, config, v_start, s=arc_length(path)))

@@ -21,7 +21,7 @@ from localization.messages import Header
 from localization.pose import Pose2D
 from planner import MidlineConfig, kernels
 from planner.bridges import ConeSet, delaunay_edges, median
-from planner.classify import ClassifiedCones
+from planner.classify import LEFT, RIGHT, ClassifiedCones, side_of_path
 from planner.geometry import (
     PathProjector,
     StationAxis,
@@ -278,3 +278,23 @@ def test_check_path_with_known_length() -> None:
         expected = check_path(path, 10, edges, config)
         assert check_path(path, 10, edges, config, float(arc_length(path)[-1])) == expected
     assert check_path(path, 10, boundary, config) == "path crosses a track boundary"
+
+
+def test_ground_points_and_sides_are_the_numpy_steps() -> None:
+    """``kernels.ground_points``: rows with finite x and y, then the origin;
+    ``side_of_path``: ``where(offset > 0, LEFT, RIGHT)`` (NaN and -0.0 are right)."""
+    rng = np.random.default_rng(11)
+    for n in (0, 1, 5, 40):
+        points = rng.uniform(-30.0, 30.0, (n, 3))
+        bad = rng.random((n, 3)) < 0.1
+        points[bad] = rng.choice([np.nan, np.inf, -np.inf], int(bad.sum()))
+        xy = points[:, :2]
+        finite = np.isfinite(xy).all(axis=1)
+        ground, got_finite = kernels.ground_points(points)
+        assert_array_equal(got_finite, finite)
+        assert_array_equal(ground, np.concatenate([xy[finite], np.zeros((1, 2))]))
+        offset = np.concatenate([points[:, 0], [0.0, -0.0, np.nan]])
+        want = np.where(offset > 0.0, np.int8(LEFT), np.int8(RIGHT))
+        got = side_of_path(offset)
+        assert got.dtype == np.int8
+        assert_array_equal(got, want)
