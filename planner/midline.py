@@ -33,8 +33,10 @@ the speed profile), with the numbers of the numpy code they replaced
 ``reference_path_planning`` runs the compiled steps between two scipy calls
 in one call each (``planner.fused``: steps 2 and 3a in
 ``cones_with_partners``, steps 3 and 4 after the triangulation in
-``bridges_and_midpoints``), with each config's settings gathered once
-(``MidlineConfig.view_settings`` ...): the same numbers, without a call,
+``bridges_and_midpoints``, step 6's arc length and crossing test with step
+7's limits after the spline in ``fused.check_and_limit``), with each
+config's settings gathered once (``MidlineConfig.view_settings`` ...,
+``SpeedProfileConfig.limit_settings``): the same numbers, without a call,
 a wrapper and a dataclass per step (``tests/planner/test_fused.py``).
 """
 
