@@ -276,6 +276,19 @@ def ground_points(points):
 
 
 @_compiled
+def with_tips(points, tangent):
+    """``midline.cones_to_sensor``'s input: (2n, 2) the points, then ``points + tangent``."""
+    n = len(points)
+    out = np.empty((2 * n, 2))
+    for i in range(n):
+        out[i, 0] = points[i, 0]
+        out[i, 1] = points[i, 1]
+        out[n + i, 0] = points[i, 0] + tangent[i, 0]
+        out[n + i, 1] = points[i, 1] + tangent[i, 1]
+    return out
+
+
+@_compiled
 def side_of_path(offset):
     """``classify.side_of_path``: (n,) int8, +1 where the offset is > 0, else -1."""
     side = np.empty(len(offset), np.int8)
