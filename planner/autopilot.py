@@ -101,6 +101,7 @@ def warm_up_planner() -> None:
     projector = PathProjector(global_path_from_centreline(centre, closed=False))
     plan = reference_path_planning(classify_cones_by_side(detections, buffer, projector), buffer)
     speed_profile(plan.path, v_start=1.0, s=arc_length(plan.path), v_end=1.0)
+    projector.project(centre[-1:], window=(30.0, 40.0))  # the pursuit's look beyond the path
 
 
 class Autopilot:

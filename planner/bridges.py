@@ -45,7 +45,7 @@ Steps of ``reference_path_planning`` that work on cones in ``os_sensor``:
 
 Written for speed (it runs per detection on a few dozen cones, where numpy's
 per-call overhead dominates): the pair table, the track estimate, the
-partners' selection, the edges from scipy's simplices, the bridge checks and
+partners' selection and positions, the edges from scipy's simplices, the bridge checks and
 the boundary edges are compiled loops (``planner.kernels``) with the numbers
 of the numpy code they replaced; medians are taken with one sort
 (``median``, the same number as ``numpy.median``), and a view with no
@@ -67,13 +67,12 @@ from planner.geometry import FloatArray, IntArray, StationAxis
 
 BoolArray = NDArray[np.bool_]
 
-_TO_LEFT = np.array([-1.0, 1.0])  # (t_y, t_x) * _TO_LEFT: the left normal of t
-
 # The fields of an empty cone set (``_no_cones``).
 _NO_POINTS = np.zeros((0, 2))
 _NO_SIDES = np.zeros(0, dtype=np.int8)
 _NO_VALUES = np.zeros(0)
 _NO_FLAGS = np.zeros(0, dtype=bool)
+_NO_SIMPLICES = np.zeros((0, 3), dtype=np.intc)  # scipy's simplices are C ints
 
 
 @dataclass(frozen=True, slots=True)
@@ -302,17 +301,17 @@ def virtual_partners(
     )
     if len(need) == 0:
         return _no_cones(cones.axis)
-    alone = cones.select(need)
-    t, side = alone.tangent, alone.side
-    left_normal = t[:, ::-1] * _TO_LEFT  # (-t_y, t_x)
-    shift = side[:, None] * track.width * left_normal
+    # One width across, along the left normal (-t_y, t_x): compiled.
+    points, side, offset = kernels.partner_points(
+        cones.points, cones.side, cones.offset, cones.tangent, need, track.width
+    )
     return ConeSet(
-        points=alone.points - shift,
-        side=(-side).astype(np.int8),
-        offset=alone.offset - side * track.width,
-        station=alone.station,
-        tangent=t,
-        virtual=np.ones(len(t), dtype=bool),
+        points=points,
+        side=side,
+        offset=offset,
+        station=cones.station.take(need),
+        tangent=cones.tangent.take(need, axis=0),
+        virtual=np.ones(len(need), dtype=bool),
         axis=cones.axis,
     )
 
@@ -330,24 +329,31 @@ def _no_cones(axis: StationAxis) -> ConeSet:
     )
 
 
+def delaunay_simplices(points: FloatArray) -> NDArray[np.intc]:
+    """The triangles (k, 3) of scipy's Delaunay triangulation of (n, 2) points.
+
+    Fewer than three points, or points all on one line, have no
+    triangulation: no triangles.
+    """
+    if len(points) < 3:
+        return _NO_SIMPLICES
+    try:
+        simplices: NDArray[np.intc] = Delaunay(points).simplices
+    except QhullError:
+        return _NO_SIMPLICES
+    return simplices
+
+
 def delaunay_edges(points: FloatArray) -> IntArray:
     """Step 2: unique edges (e, 2), i < j, of the Delaunay triangulation of (n, 2) points.
 
     Fewer than three points, or points all on one line, have no triangulation:
     two points give their one edge, otherwise no edges.
     """
-    n = len(points)
-    if n == 2:
-        return np.array([[0, 1]], dtype=np.intp)
-    if n < 3:
-        return np.zeros((0, 2), dtype=np.intp)
-    try:
-        tri = Delaunay(points)
-    except QhullError:
-        return np.zeros((0, 2), dtype=np.intp)
     # Each vertex's neighbours j > i, in the order of scipy's
     # ``vertex_neighbor_vertices`` lists, built from the simplices (compiled).
-    return kernels.delaunay_edges(tri.simplices, n)
+    edges: IntArray = kernels.delaunay_edges(delaunay_simplices(points), len(points))
+    return edges
 
 
 def find_bridges(
@@ -371,10 +377,7 @@ def find_bridges(
         cones.virtual,
         cones.axis.length,
         cones.axis.closed,
-        config.min_track_width,
-        config.max_track_width,
-        config.max_bridge_length,
-        config.max_station_gap,
+        *config.bridge_settings,
         check_width,
         track.width if track is not None else 0.0,
         config.width_tolerance,

@@ -33,8 +33,10 @@ Cones with a non-finite coordinate are dropped and counted (messages do not
 validate their numbers; ``localization.messages``).
 
 Written for speed (it runs per detection): step 2's projections are compiled
-searches (``PathProjector.project_around``, ``planner.kernels``), and the
-default settings are built once.
+searches (``PathProjector.project_around``, one call into ``planner.fused``),
+step 1's finite rows and step 3's sides are compiled loops
+(``kernels.ground_points``, ``kernels.side_of_path``: one call each instead
+of a few numpy calls), and the default settings are built once.
 """
 
 from __future__ import annotations
@@ -47,13 +49,12 @@ from numpy.typing import NDArray
 from localization.frames import Buffer
 from localization.global_path import GlobalPath
 from localization.messages import FRAME_REFERENCE, ConeDetections, Header
+from planner import kernels
 from planner.config import ClassifierConfig
 from planner.geometry import FloatArray, IntArray, PathProjector, StationAxis
 
 LEFT = 1
 RIGHT = -1
-_LEFT8, _RIGHT8 = np.int8(LEFT), np.int8(RIGHT)
-_ORIGIN = np.zeros((1, 2))  # the sensor's origin, mapped with the cones
 _DEFAULT_CONFIG = ClassifierConfig()  # frozen: built once
 
 
@@ -156,15 +157,18 @@ def _ground_to_reference(
     """``cones_to_reference`` with the sensor's origin as the last row of the cones."""
     stamp = detections.header.stamp if time is None else time
     transform = buffer.lookup_transform(reference_frame, detections.header.frame_id, stamp)
-    xy = np.asarray(detections.points, dtype=float)[:, :2]
-    finite = np.isfinite(xy).all(axis=1)
-    ground = np.concatenate([xy if finite.all() else xy.compress(finite, axis=0), _ORIGIN])
+    # The finite rows' x and y, then the origin: compiled (one call, one copy).
+    ground, finite = kernels.ground_points(np.asarray(detections.points, dtype=float))
     return transform.transform_points(ground), finite, transform.stamp
 
 
 def side_of_path(offset: FloatArray) -> NDArray[np.int8]:
-    """Step 3, the seed's rule: ``LEFT`` where the cross product is > 0, else ``RIGHT``."""
-    return np.where(offset > 0.0, _LEFT8, _RIGHT8)
+    """Step 3, the seed's rule: ``LEFT`` where the cross product is > 0, else ``RIGHT``.
+
+    Compiled (``kernels.side_of_path``): one loop instead of a comparison and a ``where``.
+    """
+    side: NDArray[np.int8] = kernels.side_of_path(np.ascontiguousarray(offset, dtype=float))
+    return side
 
 
 def side_from_colour(

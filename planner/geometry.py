@@ -46,7 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from localization.global_path import GlobalPath
-from planner import kernels
+from planner import fused, kernels
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -182,12 +182,22 @@ class PathProjector:
             centre: the window's origin station [m], if known.
         """
         p = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
-        prefer = None
-        if penalty > 0.0:
-            if centre is None:
-                centre = float(self._project(p[-1:], None).station[0])
-            prefer = self._preference((centre - back, centre + ahead), penalty)
-        return self._project(p, prefer)
+        # One compiled call: the origin, the window and the search.
+        seg, foot, station, offset, tangent, distance = fused.project_around(
+            p,
+            self._table,
+            self._blocks,
+            _BLOCK,
+            float(back),
+            float(ahead),
+            float(penalty),
+            centre is not None,
+            0.0 if centre is None else float(centre),
+            self.length,
+            self.closed,
+            self._half_max,
+        )
+        return Projection(foot, seg, station, offset, tangent, distance)
 
     @property
     def axis(self) -> StationAxis:
@@ -200,12 +210,13 @@ class PathProjector:
         """The window as (centre, half width, penalty) [m], or None when it does not apply."""
         if window is None or not penalty > 0.0:
             return None
-        lo, hi = window
+        lo, hi = float(window[0]), float(window[1])
         # The segments tile [0, length] (the whole ring when closed): a window
         # reaching well into that range overlaps one of them, so the mask
-        # over every segment is only needed near or beyond the ends.
-        inside = self.closed or (lo < self.length - self._half_max and hi > self._half_max)
-        if not (inside and hi - lo > self._half_max) and not self.window_mask(lo, hi).any():
+        # over every segment is only needed near or beyond the ends (compiled).
+        if not kernels.window_overlaps(
+            lo, hi, self._table, self.length, self.closed, self._half_max
+        ):
             return None
         return (0.5 * (lo + hi), 0.5 * (hi - lo), penalty)
 

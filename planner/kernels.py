@@ -92,6 +92,25 @@ def _mid2(px, py, table, s):
 
 
 @_compiled
+def _beyond(best, windowed):
+    """A squared distance above which a segment cannot score ``best`` or less.
+
+    Without a window the score is the squared distance: ``best``. With one it
+    is ``sqrt(d2)`` plus a penalty >= 0, which rounds to no less than
+    ``sqrt(d2)``; ``d2 > (best (1 + 2^-40))^2`` (each product rounded) gives
+    ``sqrt(d2) > best`` with room for the roundings, so the search skips the
+    square root of such a segment, and its choice is the same. inf (no skip)
+    for a best so small that its square could underflow.
+    """
+    if not windowed:
+        return best
+    if not best > 1e-100:
+        return math.inf
+    b = best * (1.0 + 2.0**-40)
+    return b * b
+
+
+@_compiled
 def nearest_segments(  # noqa: PLR0917
     p, table, blocks, size, windowed, centre, half, penalty, length, closed
 ):
@@ -110,7 +129,8 @@ def nearest_segments(  # noqa: PLR0917
     bound exceeds the best score so far (plus 1e-9 m for rounding); then,
     with a window, the other blocks only if the best score reaches
     ``penalty`` (their segments all score at least that). Exact: a skipped
-    segment cannot score as low as the best.
+    segment cannot score as low as the best; nor can a segment whose squared
+    distance exceeds ``_beyond(best)``, whose score is not computed.
     """
     n = len(p)
     n_seg = table.shape[0]
@@ -134,6 +154,7 @@ def nearest_segments(  # noqa: PLR0917
         px = p[i, 0]
         py = p[i, 1]
         best = math.inf
+        beyond = math.inf
         best_seg = -1
         first = -1
         low = math.inf
@@ -181,6 +202,8 @@ def nearest_segments(  # noqa: PLR0917
                     gx = rx - t * sdx
                     gy = ry - t * sdy
                     d2 = gx * gx + gy * gy
+                    if d2 > beyond:  # sqrt(d2) > best: neither better nor a tie
+                        continue
                     score = math.sqrt(d2) + cost[s] if windowed else d2
                     better = score < best or best_seg < 0
                     if not better and score == best:
@@ -193,6 +216,7 @@ def nearest_segments(  # noqa: PLR0917
                         seg[i] = s
                         t_best[i] = t
                         d2_best[i] = d2
+                        beyond = _beyond(best, windowed)
     return seg, t_best, d2_best
 
 
@@ -221,6 +245,78 @@ def project_rows(p, seg, t, d2, table):
         tangent[i, 1] = dy / length
         distance[i] = math.sqrt(d2[i])
     return foot, station, offset, tangent, distance
+
+
+@_compiled
+def ground_points(points):
+    """``classify``'s ground points: the rows with finite x and y, then the origin.
+
+    Args:
+        points: (n, >= 2) detections; x and y are the first two columns.
+
+    Returns:
+        (k + 1, 2) the finite rows' x and y followed by (0, 0), and the (n,)
+        mask of the finite rows (``numpy.isfinite`` of x and y, both).
+    """
+    n = len(points)
+    finite = np.empty(n, np.bool_)
+    k = 0
+    for i in range(n):
+        finite[i] = math.isfinite(points[i, 0]) and math.isfinite(points[i, 1])
+        if finite[i]:
+            k += 1
+    ground = np.zeros((k + 1, 2))
+    k = 0
+    for i in range(n):
+        if finite[i]:
+            ground[k, 0] = points[i, 0]
+            ground[k, 1] = points[i, 1]
+            k += 1
+    return ground, finite
+
+
+@_compiled
+def with_tips(points, tangent):
+    """``midline.cones_to_sensor``'s input: (2n, 2) the points, then ``points + tangent``."""
+    n = len(points)
+    out = np.empty((2 * n, 2))
+    for i in range(n):
+        out[i, 0] = points[i, 0]
+        out[i, 1] = points[i, 1]
+        out[n + i, 0] = points[i, 0] + tangent[i, 0]
+        out[n + i, 1] = points[i, 1] + tangent[i, 1]
+    return out
+
+
+@_compiled
+def side_of_path(offset):
+    """``classify.side_of_path``: (n,) int8, +1 where the offset is > 0, else -1."""
+    side = np.empty(len(offset), np.int8)
+    for i in range(len(offset)):
+        side[i] = 1 if offset[i] > 0.0 else -1
+    return side
+
+
+@_compiled
+def window_overlaps(lo, hi, table, length, closed, half_max):  # noqa: PLR0917
+    """``PathProjector._preference``'s test: some segment overlaps stations [lo, hi] [m].
+
+    Where the segments tile the window (on a closed path, or well inside an
+    open one, and wider than ``half_max``, half the longest segment) without
+    looking; otherwise ``window_mask(lo, hi).any()``: a segment whose
+    mid-station lies within the window's half width plus its half length
+    of the window's middle (``station_difference``'s wrap).
+    """
+    inside = closed or (lo < length - half_max and hi > half_max)
+    if inside and hi - lo > half_max:
+        return True
+    centre = 0.5 * (lo + hi)
+    half = 0.5 * (hi - lo)
+    for s in range(table.shape[0]):
+        reach = half + table[s, _HALF_LENGTH]
+        if abs(_wrap(table[s, _MID_STATION] - centre, length, closed)) <= reach:
+            return True
+    return False
 
 
 @_compiled
@@ -487,23 +583,44 @@ def partners_needed(  # noqa: PLR0917
 
 
 @_compiled
-def delaunay_edges(simplices, n):
-    """Unique edges (e, 2), i < j, in the order of ``Delaunay.vertex_neighbor_vertices``.
+def partner_points(points, side, offset, tangent, rows, width):  # noqa: PLR0917
+    """``virtual_partners``' new cones: (v, 2) points, (v,) sides and offsets.
 
-    scipy builds each vertex's neighbour list by walking the simplices and
-    their vertex pairs (j, k), appending k to j's list when not yet in it
-    (``setlist.add``); the CSR rows are these lists. Rows in vertex order,
-    each keeping its neighbours above the vertex, give the edges.
+    The cones ``rows`` moved one ``width`` across the track, along the left
+    normal (-t_y, t_x) of their tangent, away from their own side: the
+    numpy version's ``points - (side * width) * normal`` and
+    ``offset - side * width``, element by element.
+    """
+    v = len(rows)
+    out = np.empty((v, 2))
+    out_side = np.empty(v, np.int8)
+    out_offset = np.empty(v)
+    for q in range(v):
+        i = rows[q]
+        across = side[i] * width
+        out[q, 0] = points[i, 0] - across * (tangent[i, 1] * -1.0)
+        out[q, 1] = points[i, 1] - across * (tangent[i, 0] * 1.0)
+        out_side[q] = -side[i]
+        out_offset[q] = offset[i] - across
+    return out, out_side, out_offset
+
+
+@_compiled
+def _upper_neighbours(simplices, n, cap):
+    """Each vertex's neighbours above it, in the order scipy's lists meet them.
+
+    Returns:
+        (n,) counts and the (n, cap) lists; False when a vertex has more than
+        ``cap`` (the lists are then incomplete: call again with a larger cap).
     """
     count = np.zeros(n, np.intp)
-    cap = 16  # a Delaunay vertex has 6 neighbours on average
     lists = np.empty((n, cap), np.intp)
     for i in range(simplices.shape[0]):
         for j in range(3):
             u = simplices[i, j]
             for k in range(3):
                 v = simplices[i, k]
-                if u == v:
+                if v <= u:
                     continue
                 found = False
                 for q in range(count[u]):
@@ -511,27 +628,39 @@ def delaunay_edges(simplices, n):
                         found = True
                         break
                 if not found:
-                    if count[u] == cap:  # grow (a vertex with many neighbours)
-                        cap *= 2
-                        bigger = np.empty((n, cap), np.intp)
-                        bigger[:, : lists.shape[1]] = lists
-                        lists = bigger
+                    if count[u] == cap:
+                        return count, lists, False
                     lists[u, count[u]] = v
                     count[u] += 1
+    return count, lists, True
+
+
+@_compiled
+def delaunay_edges(simplices, n):
+    """Unique edges (e, 2), i < j, in the order of ``Delaunay.vertex_neighbor_vertices``.
+
+    scipy builds each vertex's neighbour list by walking the simplices and
+    their vertex pairs (j, k), appending k to j's list when not yet in it
+    (``setlist.add``); the CSR rows are these lists. Rows in vertex order,
+    each keeping its neighbours above the vertex, give the edges. Only the
+    neighbours above are kept (``_upper_neighbours``): leaving the others
+    out changes neither which ones above are met first nor their order.
+    Two points (no simplices) give their one edge.
+    """
+    if n == 2 and simplices.shape[0] == 0:
+        return np.array([[0, 1]], dtype=np.intp)
+    cap = 8  # a Delaunay vertex has 6 neighbours on average, 3 above it
+    count, lists, complete = _upper_neighbours(simplices, n, cap)
+    while not complete:  # a vertex with many neighbours
+        cap *= 2
+        count, lists, complete = _upper_neighbours(simplices, n, cap)
+    edges = np.empty((count.sum(), 2), np.intp)
     e = 0
     for u in range(n):
         for q in range(count[u]):
-            if u < lists[u, q]:
-                e += 1
-    edges = np.empty((e, 2), np.intp)
-    e = 0
-    for u in range(n):
-        for q in range(count[u]):
-            v = lists[u, q]
-            if u < v:
-                edges[e, 0] = u
-                edges[e, 1] = v
-                e += 1
+            edges[e, 0] = u
+            edges[e, 1] = lists[u, q]
+            e += 1
     return edges
 
 
@@ -660,6 +789,8 @@ def chain_nearest(  # noqa: PLR0917
 
     Each step goes to the nearest unvisited allowed midpoint, the first index
     of equals: the first unvisited one in a stable ``argsort`` of the row.
+    The station advance is tested first: a midpoint it rules out needs no
+    distance (the same choice, fewer ``np.hypot``).
     """
     m = len(station)
     visited = np.zeros(m, np.bool_)
@@ -676,12 +807,12 @@ def chain_nearest(  # noqa: PLR0917
         for j in range(m):
             if visited[j]:
                 continue
-            d = np.hypot(cx - midpoints[j, 0], cy - midpoints[j, 1])
             advance = _wrap(station[j] - station[current], length, closed)
+            if not (advance <= max_station_step and advance >= -back_tolerance):
+                continue  # not allowed whatever the distance: skip the hypot
+            d = np.hypot(cx - midpoints[j, 0], cy - midpoints[j, 1])
             if (
                 d <= max_step
-                and advance <= max_station_step
-                and advance >= -back_tolerance
                 and advance >= min_advance * d
                 and d < math.inf
                 and (nxt < 0 or d < step)

@@ -30,6 +30,14 @@ bridges, the ordering, the spline's sampling, step 6's crossing test, which
 only examines the path segments that straddle a boundary edge's line, and
 the speed profile), with the numbers of the numpy code they replaced
 (``tests/planner/test_kernels.py``). Step 3's triangulation is scipy's.
+``reference_path_planning`` runs the compiled steps between two scipy calls
+in one call each (``planner.fused``: steps 2 and 3a in
+``cones_with_partners``, steps 3 and 4 after the triangulation in
+``bridges_and_midpoints``, step 6's arc length and crossing test with step
+7's limits after the spline in ``fused.check_and_limit``), with each
+config's settings gathered once (``MidlineConfig.view_settings`` ...,
+``SpeedProfileConfig.limit_settings``): the same numbers, without a call,
+a wrapper and a dataclass per step (``tests/planner/test_fused.py``).
 """
 
 from __future__ import annotations
@@ -43,30 +51,27 @@ from numpy.typing import NDArray
 
 from localization.frames import LATEST, Buffer, TransformError
 from localization.messages import FRAME_OS_SENSOR, Header
-from planner import kernels
+from planner import fused, kernels
 from planner.bridges import (
     Bridges,
     ConeSet,
     PairTable,
     TrackEstimate,
-    boundary_edges,
-    delaunay_edges,
-    find_bridges,
+    delaunay_simplices,
     track_estimate,
-    virtual_partners,
 )
 from planner.classify import LEFT, RIGHT, ClassifiedCones
 from planner.config import MidlineConfig, SpeedProfileConfig
 from planner.geometry import FloatArray, arc_length
 from planner.messages import BridgeLines, LocalPath, Midpoints, Waypoints
-from planner.ordering import ordered_midpoints
-from planner.speed_profile import speed_profile
+from planner.speed_profile import profile_speeds, speed_profile
 from planner.spline import fit_path
 
 SpeedFn = Callable[[FloatArray, "FloatArray | None"], FloatArray]
 """``speeds(path, s)``: the waypoints' speeds for a path and its arc length (or None)."""
 
 _DEFAULT_CONFIG = MidlineConfig()  # frozen: built once
+_DEFAULT_SPEED = SpeedProfileConfig()
 
 
 class PlanStatus(StrEnum):
@@ -157,9 +162,9 @@ def cones_to_sensor(
     """Step 1: the classified cones in ``sensor_frame``; also the stamp used [s]."""
     transform = buffer.lookup_transform(sensor_frame, cones.header.frame_id, time)
     n = len(cones.points)
-    # The cones and their tangents' tips in one call (row by row, the same numbers).
-    tips = cones.points + cones.tangent
-    mapped = transform.transform_points(np.concatenate([cones.points, tips]))
+    # The cones and their tangents' tips in one call (row by row, the same
+    # numbers), stacked by one compiled loop.
+    mapped = transform.transform_points(kernels.with_tips(cones.points, cones.tangent))
     points = mapped[:n]
     tangent = mapped[n:] - points
     cone_set = ConeSet(
@@ -209,21 +214,89 @@ def boundary_cones(
         cones.station,
         axis.length,
         axis.closed,
-        config.min_x,
-        config.max_range,
-        config.min_boundary_offset,
-        config.max_boundary_offset,
-        config.max_station_gap,
-        config.min_track_width,
-        config.max_track_width,
-        config.max_bridge_length,
-        config.min_width_samples,
-        config.boundary_tolerance,
+        *config.view_settings,
     )
     real = cones if len(keep) == len(cones) else cones.select(keep)
     pairs = PairTable(left, right, dist, same, span, middle)
     track = track_estimate(width, centre, measured, config)
     return real, pairs, track, len(cones) - len(real)
+
+
+def cones_with_partners(
+    cones: ConeSet, config: MidlineConfig
+) -> tuple[ConeSet, TrackEstimate, int]:
+    """Steps 2 and 3a in one compiled call (``fused.plan_cones``).
+
+    ``boundary_cones``, then ``virtual_partners`` joined after the kept
+    cones: the same cones, estimate and count, without the pair table.
+
+    Returns:
+        The kept cones followed by their virtual partners, the width and
+        middle in view, and how many cones were dropped.
+    """
+    axis = cones.axis
+    points, side, offset, station, tangent, virtual, width, centre, measured, dropped = (
+        fused.plan_cones(
+            cones.points,
+            cones.side,
+            cones.offset,
+            cones.station,
+            cones.tangent,
+            axis.length,
+            axis.closed,
+            config.view_settings,
+            config.partner_settings,
+        )
+    )
+    cone_set = ConeSet(points, side, offset, station, tangent, virtual, axis)
+    return cone_set, TrackEstimate(float(width), float(centre), bool(measured)), int(dropped)
+
+
+def bridges_and_midpoints(
+    cones: ConeSet,
+    simplices: NDArray[np.intc],
+    config: MidlineConfig,
+    track: TrackEstimate,
+    sensor_station: float,
+) -> tuple[Bridges, FloatArray, FloatArray, float]:
+    """Steps 3 and 4 after the triangulation, in one compiled call (``fused.plan_midpoints``).
+
+    ``find_bridges`` on the triangulation's edges, ``ordered_midpoints``, and
+    the boundary edges as segments.
+
+    Args:
+        cones: real and virtual cones.
+        simplices: (t, 3) their Delaunay triangles (``bridges.delaunay_simplices``).
+        config: the settings.
+        track: the width in view (checked when measured).
+        sensor_station: the sensor's station [m].
+
+    Returns:
+        The bridges, the (e, 2, 2) boundary segments [m], the (m, 2) ordered
+        midpoints [m] and their polyline's length [m].
+    """
+    axis = cones.axis
+    left, right, length, valid, used, mid, station, boundary, ordered, ordered_length = (
+        fused.plan_midpoints(
+            simplices,
+            cones.points,
+            cones.side,
+            cones.offset,
+            cones.station,
+            cones.virtual,
+            axis.length,
+            axis.closed,
+            config.bridge_settings,
+            track.measured,
+            track.width,
+            config.width_tolerance,
+            config.bridge_selection == "shortest",
+            sensor_station,
+            config.ordering_settings,
+        )
+    )
+    bridges = Bridges(left, right, length, valid, used, mid, station)
+    return bridges, boundary, ordered, float(ordered_length)
 
 
 def check_path(
@@ -232,6 +305,8 @@ def check_path(
     boundary: FloatArray,
     config: MidlineConfig,
     length: float | None = None,
+    *,
+    crosses: bool | None = None,
 ) -> str:
     """Step 6: why the path is not sound, or "" when it is.
 
@@ -241,6 +316,8 @@ def check_path(
         boundary: (e, 2, 2) boundary edges it may not cross [m].
         config: the thresholds.
         length: the path's length [m] if known (``arc_length(path)[-1]``).
+        crosses: whether it crosses a boundary edge, if known
+            (``kernels.crosses_boundary(path, boundary)``).
     """
     if n_midpoints < 2:
         return f"{n_midpoints} ordered midpoints (need 2)"
@@ -251,7 +328,9 @@ def check_path(
     start = float(np.hypot(path[0, 0], path[0, 1]))
     if start > config.max_start_distance:
         return f"path starts {start:.2f} m away (max {config.max_start_distance} m)"
-    if kernels.crosses_boundary(path, boundary):  # polyline_crosses, compiled
+    if crosses is None:
+        crosses = bool(kernels.crosses_boundary(path, boundary))  # polyline_crosses, compiled
+    if crosses:
         return "path crosses a track boundary"
     return ""
 
@@ -321,33 +400,37 @@ def reference_path_planning(
     """
     config = config or _DEFAULT_CONFIG
     all_cones, stamp = cones_to_sensor(cones, buffer, time, sensor_frame)
-    real, pairs, track, dropped = boundary_cones(all_cones, config)
-    cone_set = real.join(virtual_partners(real, pairs, config, track))
-    edges = delaunay_edges(cone_set.points)
-    bridges = find_bridges(cone_set, edges, config, track)
-    midpoints = ordered_midpoints(bridges, cones.sensor_station, cones.axis, config)
-    path = fit_path(midpoints, config)
-    boundary = cone_set.points.take(boundary_edges(cone_set, edges, config), axis=0)
-    s = arc_length(path)  # for the check and the speed profile
-    reason = check_path(path, len(midpoints), boundary, config, float(s[-1]))
+    cone_set, track, dropped = cones_with_partners(all_cones, config)
+    bridges, boundary, midpoints, midpoints_length = bridges_and_midpoints(
+        cone_set, delaunay_simplices(cone_set.points), config, track, cones.sensor_station
+    )
+    path = np.ascontiguousarray(fit_path(midpoints, config, midpoints_length), dtype=float)
+    # The arc length for the check and the speed profile, the crossing test
+    # and the profile's limits: one compiled call.
+    s, crosses, limits = fused.check_and_limit(
+        path, boundary, speeds is None, (speed_config or _DEFAULT_SPEED).limit_settings
+    )
+    reason = check_path(path, len(midpoints), boundary, config, float(s[-1]), crosses=crosses)
     status = PlanStatus.OK
-    path_s: FloatArray | None = s
     if reason:
         carried = carry_path_forward(previous, buffer, stamp, cones.header.frame_id, sensor_frame)
         status = PlanStatus.FAILED if carried is None else PlanStatus.FALLBACK
         path = np.zeros((0, 2)) if carried is None else carried
-        path_s = None
+        if speeds is None:
+            path_speeds = speed_profile(path, speed_config, v_start)
+        else:
+            path_speeds = speeds(path, None)
+    elif speeds is None:
+        path_speeds = profile_speeds(limits, speed_config, v_start)
+    else:
+        path_speeds = speeds(path, s)
     return LocalPlan(
         header=Header(stamp, sensor_frame),
         cones=cone_set,
         bridges=bridges,
         midpoints=midpoints,
         path=path,
-        speeds=(
-            speed_profile(path, speed_config, v_start, s=path_s)
-            if speeds is None
-            else speeds(path, path_s)
-        ),
+        speeds=path_speeds,
         status=status,
         reason=reason,
         track=track,

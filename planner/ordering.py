@@ -119,13 +119,6 @@ def ordered_midpoints(
         sensor_station,
         axis.length,
         axis.closed,
-        config.start_min_x,
-        config.start_station_back,
-        config.start_station_ahead,
-        config.max_step,
-        config.max_station_step,
-        config.station_back_tolerance,
-        config.min_step_advance,
-        config.min_midpoint_spacing,
+        *config.ordering_settings,
     )
     return ordered

@@ -229,18 +229,30 @@ def speed_profile(
     pts = np.ascontiguousarray(points, dtype=float)
     if len(pts) == 0:
         return np.zeros(0)
-    arc, kappa, v, ratio = kernels.profile_limits(
+    limits = kernels.profile_limits(
         pts,
         _NO_ARC if s is None else np.ascontiguousarray(s, dtype=float),
         s is not None,
-        float(c.curvature_window),
-        float(c.a_lat_max),
-        float(c.a_lat_aero),
-        c.a_lat_max / c.v_max**2,  # as curvature_limit's floor
-        float(c.v_max),
-        float(c.lateral_jerk_max),
-        float(c.jerk_window),
+        *c.limit_settings,
     )
+    return profile_speeds(limits, c, v_start, v_end)
+
+
+def profile_speeds(
+    limits: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+    config: SpeedProfileConfig | None = None,
+    v_start: float | None = None,
+    v_end: float | None = None,
+) -> FloatArray:
+    """The speeds (n,) [m/s] from ``kernels.profile_limits``' (s, kappa, v, ratio).
+
+    The jerk limit's cube root (``numpy.cbrt``) and the passes
+    (``kernels.profile_passes``, which changes ``v`` in place); the rest of
+    ``speed_profile``, for a caller that had the limits computed in a
+    compiled call of its own (``fused.check_and_limit``).
+    """
+    c = config or _DEFAULT_CONFIG
+    arc, kappa, v, ratio = limits
     speeds: FloatArray = kernels.profile_passes(
         arc,
         kappa,
@@ -248,12 +260,7 @@ def speed_profile(
         np.cbrt(ratio) if len(ratio) else ratio,  # jerk_limit's cube root, numpy's
         v_start is not None,
         0.0 if v_start is None else float(v_start),
-        bool(c.friction_ellipse),
-        float(c.a_drive),
-        float(c.a_brake),
-        float(c.a_lat_max),
-        float(c.a_lat_aero),
-        bool(c.horizon_stop),
+        *c.pass_settings,
         v_end is not None,
         0.0 if v_end is None else float(v_end),
     )

@@ -35,11 +35,17 @@ from planner.geometry import FloatArray, arc_length, resample_polyline
 _SAMPLES_PER_STEP = 2  # spline samples per output step, for the arc length
 
 
-def spline_through(points: FloatArray, config: MidlineConfig) -> FloatArray | None:
-    """Points (p, 2) every ``spacing`` along the B-spline through (m, 2) points, or None."""
+def spline_through(
+    points: FloatArray, config: MidlineConfig, length: float | None = None
+) -> FloatArray | None:
+    """Points (p, 2) every ``spacing`` along the B-spline through (m, 2) points, or None.
+
+    ``length`` is the points' polyline length [m] if known (``arc_length(points)[-1]``).
+    """
     m = len(points)
     degree = min(config.spline_degree, m - 1)
-    length = float(arc_length(points)[-1])
+    if length is None:
+        length = float(arc_length(points)[-1])
     count = max(int(length * _SAMPLES_PER_STEP / config.spacing) + 2, 2 * m)
     try:
         # full_output: FITPACK's flag instead of a warning (ier 1-3) or an
@@ -61,12 +67,15 @@ def spline_through(points: FloatArray, config: MidlineConfig) -> FloatArray | No
     return path if len(path) else None
 
 
-def fit_path(midpoints: FloatArray, config: MidlineConfig) -> FloatArray:
+def fit_path(
+    midpoints: FloatArray, config: MidlineConfig, length: float | None = None
+) -> FloatArray:
     """The local path (p, 2) [m]: spline (or polyline) through midpoints, every ``spacing``.
 
     Args:
         midpoints: (m, 2) ordered midpoints [m]; duplicates must be merged.
         config: spline and spacing settings.
+        length: the midpoints' polyline length [m] if known.
 
     Returns:
         Points every ``config.spacing`` of arc length from the first midpoint,
@@ -75,7 +84,7 @@ def fit_path(midpoints: FloatArray, config: MidlineConfig) -> FloatArray:
     if len(midpoints) < 2:
         return np.array(midpoints, dtype=float).reshape(-1, 2)
     if len(midpoints) >= config.min_spline_points:
-        path = spline_through(midpoints, config)
+        path = spline_through(midpoints, config, length)
         if path is not None:
             return path
     return resample_polyline(midpoints, config.spacing)

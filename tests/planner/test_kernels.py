@@ -612,8 +612,8 @@ def test_kernels_are_deterministic() -> None:
 
 
 def test_import_without_a_writable_cache_directory() -> None:
-    """No cache directory numba can write: the planner's and the EKF's kernels compile
-    uncached, each module with its warning."""
+    """No cache directory numba can write: the planner's (``kernels``, ``fused``) and
+    the EKF's kernels compile uncached, each module with its warning."""
 
     script = """
 import warnings
@@ -629,7 +629,7 @@ with warnings.catch_warnings(record=True) as caught:
     from localization.ekf import kernels as ekf_kernels
 import numpy as np
 owners = {str(w.message).split(":")[0] for w in caught if "no writable cache" in str(w.message)}
-assert owners == {"planner.kernels", "localization.ekf.kernels"}, caught
+assert owners == {"planner.kernels", "planner.fused", "localization.ekf.kernels"}, caught
 assert kernels.arc_length(np.array([[0.0, 0.0], [3.0, 4.0]])).tolist() == [0.0, 5.0]
 p = np.array([[1.0, 2.0], [4.0, 3.0]])
 assert ekf_kernels.symmetrised(p).tolist() == [[1.0, 3.0], [3.0, 3.0]]
@@ -651,12 +651,12 @@ from localization.frames import Buffer, TransformStamped
 from localization.global_path import global_path_from_centreline
 from localization.messages import ConeDetections, Header
 from localization.pose import Pose2D
-from planner import AutopilotConfig, kernels
+from planner import AutopilotConfig, fused, kernels
 from planner.autopilot import Autopilot
 from planner.midline import PlanStatus
 
 def loaded():
-    return {k: len(v.signatures) for k, v in vars(kernels).items()
+    return {k: len(v.signatures) for module in (kernels, fused) for k, v in vars(module).items()
             if isinstance(v, CPUDispatcher) and v.signatures}
 
 x = np.arange(0.0, 200.0, 0.5)
@@ -687,7 +687,8 @@ for pilot in pilots:
         ok += plan is not None and plan.status is PlanStatus.OK
 assert ok > 30, ok
 assert loaded() == after_warm_up, (after_warm_up, loaded())
-assert {"profile_limits", "profile_passes", "spline_path", "nearest_segments"} <= set(loaded())
+assert {"profile_limits", "profile_passes", "spline_path", "project_around", "plan_cones",
+        "plan_midpoints", "window_overlaps"} <= set(loaded())
 print("ok")
 """
     run_child(script)

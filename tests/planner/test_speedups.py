@@ -21,7 +21,7 @@ from localization.messages import Header
 from localization.pose import Pose2D
 from planner import MidlineConfig, kernels
 from planner.bridges import ConeSet, delaunay_edges, median
-from planner.classify import ClassifiedCones
+from planner.classify import LEFT, RIGHT, ClassifiedCones, side_of_path
 from planner.geometry import (
     PathProjector,
     StationAxis,
@@ -180,8 +180,12 @@ def test_cone_set_select_and_join() -> None:
 def test_delaunay_edges_in_scipy_neighbour_order() -> None:
     """Each vertex's neighbours j > i, in ``vertex_neighbor_vertices`` order."""
     rng = np.random.default_rng(7)
-    for n in (3, 10, 40):
-        points = rng.uniform(0.0, 30.0, (n, 2))
+    angle = np.linspace(0.0, 2.0 * np.pi, 40, endpoint=False)
+    fan = np.vstack([[0.0, 0.0], np.column_stack([np.cos(angle), np.sin(angle)])])
+    samples = [rng.uniform(0.0, 30.0, (n, 2)) for n in (3, 10, 40)]
+    # A vertex with 40 neighbours above it: the lists' capacity grows (twice).
+    for points in [*samples, fan + rng.normal(0.0, 1e-3, fan.shape)]:
+        n = len(points)
         indptr, indices = Delaunay(points).vertex_neighbor_vertices
         rows = np.repeat(np.arange(n), np.diff(indptr))
         keep = rows < indices
@@ -274,3 +278,23 @@ def test_check_path_with_known_length() -> None:
         expected = check_path(path, 10, edges, config)
         assert check_path(path, 10, edges, config, float(arc_length(path)[-1])) == expected
     assert check_path(path, 10, boundary, config) == "path crosses a track boundary"
+
+
+def test_ground_points_and_sides_are_the_numpy_steps() -> None:
+    """``kernels.ground_points``: rows with finite x and y, then the origin;
+    ``side_of_path``: ``where(offset > 0, LEFT, RIGHT)`` (NaN and -0.0 are right)."""
+    rng = np.random.default_rng(11)
+    for n in (0, 1, 5, 40):
+        points = rng.uniform(-30.0, 30.0, (n, 3))
+        bad = rng.random((n, 3)) < 0.1
+        points[bad] = rng.choice([np.nan, np.inf, -np.inf], int(bad.sum()))
+        xy = points[:, :2]
+        finite = np.isfinite(xy).all(axis=1)
+        ground, got_finite = kernels.ground_points(points)
+        assert_array_equal(got_finite, finite)
+        assert_array_equal(ground, np.concatenate([xy[finite], np.zeros((1, 2))]))
+        offset = np.concatenate([points[:, 0], [0.0, -0.0, np.nan]])
+        want = np.where(offset > 0.0, np.int8(LEFT), np.int8(RIGHT))
+        got = side_of_path(offset)
+        assert got.dtype == np.int8
+        assert_array_equal(got, want)
