@@ -20,6 +20,8 @@ tree and the global path. It never imports ``sim``.
 
 from __future__ import annotations
 
+import logging
+
 from planner.autopilot import Autopilot
 from planner.classify import LEFT, RIGHT, ClassifiedCones, classify_cones_by_side
 from planner.config import (
@@ -43,6 +45,9 @@ from planner.midline import LocalPlan, PlanStatus, carry_path_forward, reference
 from planner.pure_pursuit import SteeringResult, lookahead_distance, pure_pursuit
 from planner.speed_control import SpeedController, target_on_path
 from planner.speed_profile import speed_profile
+
+# A library logs, the application decides what is shown (as in localization).
+logging.getLogger(__name__).addHandler(logging.NullHandler())
 
 __all__ = [
     "LEFT",

@@ -39,6 +39,7 @@ ends inside the lookahead circle) and ``lookahead_point`` (current
 from __future__ import annotations
 
 import functools
+import logging
 import math
 from collections.abc import Iterable
 
@@ -70,6 +71,8 @@ from planner.midline import LocalPlan, PlanStatus, reference_path_planning
 from planner.pure_pursuit import SteeringResult, lookahead_distance, pure_pursuit
 from planner.speed_control import SpeedController, target_on_path
 from planner.speed_profile import forward_pass, speed_profile
+
+_log = logging.getLogger(__name__)
 
 _TIME_EPS = 1e-9  # [s] tolerance of the control schedule
 
@@ -215,8 +218,16 @@ class Autopilot:
             path_reference = self.buffer.transform_points(
                 c.reference_frame, c.sensor_frame, plan.path, plan.header.stamp
             )
-        except TransformError:
+        except TransformError as err:
             self.skipped_count += 1
+            # The first skip says why (e.g. detections in a frame the tree does
+            # not have); later ones are only counted, at 10 Hz they would flood.
+            (_log.warning if self.skipped_count == 1 else _log.debug)(
+                "detections at %.6f s skipped (%d so far): %s",
+                message.header.stamp,
+                self.skipped_count,
+                err,
+            )
             return None
         self.path_curvature = curvature  # set with the plan it belongs to
         self.classified = classified

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any, Self
 
-from localization.messages import FRAME_OS_SENSOR, FRAME_REFERENCE
+from localization.messages import CONE_COLOURS, FRAME_OS_SENSOR, FRAME_REFERENCE
 
 
 def _check(owner: str, name: str, value: float, lo: float, hi: float = math.inf) -> None:
@@ -98,6 +98,14 @@ class ClassifierConfig(Settings):
             raise ValueError(
                 f"ClassifierConfig.mode = {self.mode!r}: allowed 'geometric', 'colour'"
             )
+        for name in ("left_colours", "right_colours"):
+            value = getattr(self, name)
+            if isinstance(value, str) or not set(value) <= set(CONE_COLOURS):
+                raise ValueError(
+                    f"ClassifierConfig.{name} = {value!r}: a tuple of colours from "
+                    f"{list(CONE_COLOURS)}"
+                )
+            object.__setattr__(self, name, tuple(value))  # a list (from YAML) as a tuple
         if set(self.left_colours) & set(self.right_colours):
             raise ValueError("ClassifierConfig: a colour cannot be both left and right")
 

@@ -15,8 +15,9 @@ distance grows with speed,
 and the target is where the path leaves the circle of radius L_d about the
 rear axle, searching forward from the path point nearest the axle
 (interpolated on the segment that crosses the circle). When the whole path
-lies inside the circle, the target is its last point; when it starts outside,
-its first point. Either way the formula uses the target's actual distance.
+lies inside the circle, the target is its last point; when the point nearest
+the axle already lies outside it, that point. Either way the formula uses the
+target's actual distance.
 """
 
 from __future__ import annotations
@@ -144,7 +145,17 @@ def pure_pursuit(
         config: geometry, limits and lookahead law.
         lookahead_cap: the lookahead distance is at most this [m] (not below
             ``lookahead_min``); None: the law alone.
+
+    Raises:
+        ValueError: ``path`` not (n, 2) with n >= 1 or not finite, or
+            ``speed`` not finite (a NaN would pass the steering clip).
     """
+    pts = np.asarray(path, dtype=float)
+    if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) == 0:
+        raise ValueError(f"pure_pursuit: path must be (n, 2) [m] with n >= 1, got {pts.shape}")
+    if not (math.isfinite(speed) and np.isfinite(pts).all()):
+        raise ValueError(f"pure_pursuit: path and speed must be finite, speed {speed!r}")
+    path = pts
     axle = np.array([config.rear_axle_x, 0.0])
     lookahead = lookahead_distance(speed, config)
     if lookahead_cap is not None:

@@ -16,6 +16,8 @@ the acceleration the profile's forward and backward passes planned.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from planner.config import SpeedControlConfig
@@ -105,7 +107,16 @@ class SpeedController:
             a_ff: planned acceleration to feed forward [m/s^2].
             a_lat: lateral acceleration the steering asks for now [m/s^2]
                 (``ellipse_limits``).
+
+        Raises:
+            ValueError: an argument is not finite, or ``dt`` is negative: one
+                NaN would stay in the integral and make every later command NaN.
         """
+        if not (math.isfinite(v_ref + speed + a_ff + a_lat) and math.isfinite(dt) and dt >= 0.0):
+            raise ValueError(
+                "SpeedController.step: arguments must be finite and dt >= 0, got "
+                f"v_ref={v_ref!r}, speed={speed!r}, dt={dt!r}, a_ff={a_ff!r}, a_lat={a_lat!r}"
+            )
         c = self.config
         max_accel, max_decel = ellipse_limits(a_lat, c, speed)
         error = v_ref - speed

@@ -209,6 +209,7 @@ def speed_profile(
     *,
     s: FloatArray | None = None,
     v_end: float | None = None,
+    check: bool = True,
 ) -> FloatArray:
     """Target speed (n,) [m/s] at each waypoint of an (n, 2) path [m].
 
@@ -224,18 +225,41 @@ def speed_profile(
         s: ``arc_length(points)`` [m] if known.
         v_end: with ``horizon_stop``, the speed allowed at the last waypoint
             [m/s] instead of 0 (the global path says what lies beyond it).
+        check: check the arguments (below); False gives what the kernels do
+            with any input, NaN and inf included, which the kernels' tests
+            hold to the numpy steps bit for bit.
+
+    Raises:
+        ValueError: ``points`` not (n, 2) or not finite, ``s`` not (n,) or
+            not finite, ``v_start`` or ``v_end`` not finite (a NaN would
+            otherwise pass every limit and read as top speed).
     """
     c = config or _DEFAULT_CONFIG
     pts = np.ascontiguousarray(points, dtype=float)
+    arc = _NO_ARC if s is None else np.ascontiguousarray(s, dtype=float)
+    if check:
+        _check_profile_inputs(pts, arc if s is not None and len(pts) else None, v_start, v_end)
     if len(pts) == 0:
         return np.zeros(0)
-    limits = kernels.profile_limits(
-        pts,
-        _NO_ARC if s is None else np.ascontiguousarray(s, dtype=float),
-        s is not None,
-        *c.limit_settings,
-    )
+    limits = kernels.profile_limits(pts, arc, s is not None, *c.limit_settings)
     return profile_speeds(limits, c, v_start, v_end)
+
+
+def _check_profile_inputs(
+    pts: FloatArray, s: FloatArray | None, v_start: float | None, v_end: float | None
+) -> None:
+    """``speed_profile``'s argument checks (see its Raises)."""
+    if pts.ndim != 2 or pts.shape[1] != 2:
+        raise ValueError(f"speed_profile: points must be (n, 2) [m], got shape {pts.shape}")
+    if not np.isfinite(pts).all():
+        raise ValueError("speed_profile: points must be finite (got NaN or inf)")
+    if s is not None and (s.shape != (len(pts),) or not np.isfinite(s).all()):
+        raise ValueError(
+            f"speed_profile: s must be ({len(pts)},) finite arc lengths [m], got shape {s.shape}"
+        )
+    for name, v in (("v_start", v_start), ("v_end", v_end)):
+        if v is not None and not math.isfinite(v):
+            raise ValueError(f"speed_profile: {name} must be a finite speed [m/s], got {v!r}")
 
 
 def profile_speeds(

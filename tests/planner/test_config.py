@@ -54,6 +54,8 @@ def test_unknown_nested_key_raises() -> None:
         (PurePursuitConfig, {"lookahead_max": 1.0}),  # below lookahead_min
         (ClassifierConfig, {"mode": "magic"}),
         (ClassifierConfig, {"left_colours": ("blue",), "right_colours": ("blue",)}),
+        (ClassifierConfig, {"left_colours": "blue"}),  # a string, not a tuple of colours
+        (ClassifierConfig, {"right_colours": ("Yellow",)}),  # not a CONE_COLOURS label
         (AutopilotConfig, {"control_rate": 0.0}),
         (AutopilotConfig, {"speed_source": "map"}),
         (SpeedControlConfig, {"integral_band": -1.0}),
@@ -70,3 +72,9 @@ def test_out_of_range_values_raise(cls: type, values: dict[str, object]) -> None
     """Values out of range raise ValueError when the settings are built."""
     with pytest.raises(ValueError):
         cls.from_dict(values)
+
+
+def test_colour_lists_from_a_file_are_tuples() -> None:
+    """left_colours given as a list (YAML) is kept as the tuple of its colours."""
+    config = ClassifierConfig.from_dict({"mode": "colour", "left_colours": ["blue", "orange"]})
+    assert config.left_colours == ("blue", "orange")

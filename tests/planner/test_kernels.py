@@ -503,13 +503,17 @@ def test_speed_profile_is_the_numpy_steps() -> None:
         v_end = ends[i % len(ends)]
         with np.errstate(invalid="ignore"):  # the NaN cases
             expected = ref_speed_profile(points, config, v_start, v_end=v_end)
-        assert_bits_equal(speed_profile(points, config, v_start, v_end=v_end), expected)
+        assert_bits_equal(
+            speed_profile(points, config, v_start, v_end=v_end, check=False), expected
+        )
         if len(points):
             # as computed; scaled; evenly spaced (finite also where a point is NaN)
             s = [arc_length(points), 1.1 * arc_length(points), 0.4 * np.arange(len(points))][i % 3]
             with np.errstate(invalid="ignore", over="ignore"):
                 expected = ref_speed_profile(points, config, v_start, s=s, v_end=v_end)
-            assert_bits_equal(speed_profile(points, config, v_start, s=s, v_end=v_end), expected)
+            assert_bits_equal(
+                speed_profile(points, config, v_start, s=s, v_end=v_end, check=False), expected
+            )
 
 
 def test_speed_profile_edge_cases_for_every_switch() -> None:
@@ -539,7 +543,7 @@ def test_speed_profile_edge_cases_for_every_switch() -> None:
         for v_start, v_end in speeds:
             with np.errstate(invalid="ignore", over="ignore"):
                 expected = ref_speed_profile(points, config, v_start, s=s, v_end=v_end)
-            got = speed_profile(points, config, v_start, s=s, v_end=v_end)
+            got = speed_profile(points, config, v_start, s=s, v_end=v_end, check=False)
             assert_bits_equal(got, expected)
 
 

@@ -100,3 +100,16 @@ def test_lookahead_cap() -> None:
     assert pure_pursuit(path, 10.0, CONFIG).distance == pytest.approx(6.0)
     assert pure_pursuit(path, 10.0, CONFIG, lookahead_cap=3.0).distance == pytest.approx(3.0)
     assert pure_pursuit(path, 10.0, CONFIG, lookahead_cap=0.5).distance == pytest.approx(2.0)
+
+
+def test_bad_path_or_speed_is_refused() -> None:
+    """An empty path, a NaN waypoint and a NaN speed are ValueErrors, not a
+    NaN steering angle past the clip."""
+    path = np.array([[1.0, 0.0], [5.0, 0.0], [10.0, 0.0]])
+    with pytest.raises(ValueError, match=r"path must be \(n, 2\) \[m\] with n >= 1"):
+        pure_pursuit(np.zeros((0, 2)), 8.0, CONFIG)
+    with pytest.raises(ValueError, match="must be finite"):
+        pure_pursuit(np.array([[1.0, 0.0], [5.0, math.nan]]), 8.0, CONFIG)
+    with pytest.raises(ValueError, match="must be finite"):
+        pure_pursuit(path, math.nan, CONFIG)
+    assert pure_pursuit(path, 8.0, CONFIG).steering == pytest.approx(0.0)

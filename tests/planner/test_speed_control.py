@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
@@ -87,3 +89,18 @@ def test_ellipse_limits_share_the_grip_with_the_corner() -> None:
     assert controller.step(20.0, 10.0, DT, a_lat=12.0) == pytest.approx(1.8)
     free = SpeedControlConfig(max_accel=3.0, lateral_grip=float("inf"))
     assert ellipse_limits(30.0, free) == (3.0, 10.0)
+
+
+@pytest.mark.parametrize(
+    "args", [(10.0, math.nan, DT), (math.inf, 5.0, DT), (10.0, 5.0, math.nan), (10.0, 5.0, -DT)]
+)
+def test_non_finite_input_or_negative_dt_is_refused(args: tuple[float, float, float]) -> None:
+    """A NaN speed or dt is refused and leaves the integral as it was (it
+    would otherwise stay in it and make every later command NaN)."""
+    controller = SpeedController(SpeedControlConfig())
+    controller.step(10.0, 9.5, DT)
+    before = controller.integral
+    with pytest.raises(ValueError, match="must be finite and dt >= 0"):
+        controller.step(*args)
+    assert controller.integral == before
+    assert math.isfinite(controller.step(10.0, 9.5, DT))

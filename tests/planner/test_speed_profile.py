@@ -207,3 +207,24 @@ def test_jerk_limit_on_a_curvature_ramp() -> None:
     assert v[28] == pytest.approx(18.17, abs=0.01)
     assert np.all(np.isinf(v[:15])) and np.all(np.isinf(v[-15:]))
     assert jerk_limit(kappa, 0.5, SpeedProfileConfig(lateral_jerk_max=math.inf)) is None
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"points": np.zeros(4)}, r"points must be \(n, 2\)"),
+        ({"points": np.array([[0.0, 0.0], [1.0, math.nan], [2.0, 0.0]])}, "finite"),
+        ({"s": np.arange(10.0)}, r"s must be \(3,\)"),
+        ({"v_start": math.nan}, "v_start must be a finite speed"),
+        ({"v_end": math.inf}, "v_end must be a finite speed"),
+    ],
+)
+def test_bad_inputs_are_named(kwargs: dict[str, object], message: str) -> None:
+    """A NaN point or start speed (which would pass every limit and read as
+    top speed) or an arc length of the wrong length (read out of bounds by
+    the compiled kernel) is a ValueError naming it."""
+    args: dict[str, object] = {"points": np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]])}
+    args.update(kwargs)
+    points = args.pop("points")
+    with pytest.raises(ValueError, match=message):
+        speed_profile(points, **args)  # type: ignore[arg-type]
