@@ -21,8 +21,9 @@
   hairpin or a figure of eight never swap. Off the track that walk can hold
   on to the stretch the car left while the car crosses the infield to another
   one; so while the car's centre is outside the track, a search of the whole
-  centreline moves the walk to a stretch ``rejoin_margin_m`` nearer than the
-  one it holds. Progress is the net change of the car's station, so a cut
+  centreline (on leaving, then after each ``rejoin_margin_m`` the car moves)
+  moves the walk to a stretch ``rejoin_margin_m`` nearer than the one it
+  holds. Progress is the net change of the car's station, so a cut
   counts the stretch it skipped (positive or negative) and is an off-track
   event (FS charges 10 s per off-course).
 * Stuck: less than ``stuck_progress_m`` of net progress in ``stuck_time_s``.
@@ -156,12 +157,14 @@ class RaceControl:
         self._s_last: float | None = None
         self._progress_at_crossing = 0.0
         self._history: deque[tuple[float, float]] = deque()
+        self._searched_at: tuple[float, float] | None = None  # the last off-track search
 
     def start(self, t: float, pose: Pose2D) -> None:
         """Initialise at the start pose; starts the clock if already past the line."""
         proj = self.progress.project(pose.xy)
         self._s_last = proj.s
         self._history = deque([(t, 0.0)])
+        self._searched_at = None
         line_mid = self.line.mean(axis=0)
         line_dir = self.line[1] - self.line[0]
         normal = np.array([-line_dir[1], line_dir[0]])
@@ -187,7 +190,9 @@ class RaceControl:
         # Runs every physics step: plain-float maths, the checks written out.
         p1x, p1y, yaw = pose
         s, lateral, index, tx, ty = self.progress.project_xy(p1x, p1y)
-        if abs(lateral) > self._half_widths_list[min(index, len(self._half_widths_list) - 1)]:
+        if abs(lateral) <= self._half_widths_list[min(index, len(self._half_widths_list) - 1)]:
+            self._searched_at = None
+        elif self._search_due(p1x, p1y):
             s, lateral, index, tx, ty = self._nearer_stretch(p1x, p1y, (s, lateral, index, tx, ty))
         self._advance_progress(s)
         p0x, p0y = xy_prev
@@ -195,6 +200,17 @@ class RaceControl:
             self._crossed(t_prev, t, (p0x, p0y), (p1x, p1y))
         self._set_off_track(t, self._off(lateral, index, tx, ty, yaw))
         self._check_stuck(t)
+
+    def _search_due(self, px: float, py: float) -> bool:
+        """Whether to search the whole centreline for the off-track centre (px, py):
+        on leaving the track, then each time the car has moved ``rejoin_margin_m``
+        since the last search (a search every physics step doubled the cost of
+        an env step with the car off the track)."""
+        last = self._searched_at
+        if last is not None and math.hypot(px - last[0], py - last[1]) < self.rules.rejoin_margin_m:
+            return False
+        self._searched_at = (px, py)
+        return True
 
     def _nearer_stretch(
         self, px: float, py: float, walked: tuple[float, float, int, float, float]
