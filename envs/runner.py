@@ -136,12 +136,20 @@ def run_scenario(
         ValueError: ``env_options`` repeats an argument of this function, or
             ``EnvConfig`` refuses a field.
     """
-    named = {"track", "laps", "sensors", "localization", "render_mode"}
-    repeated = sorted(named.intersection(env_options or {}))
+    # env_options keys that run_scenario sets itself, and the keyword to use instead
+    own = {
+        "track": "track",
+        "laps": "laps",
+        "sensors": "sensors",
+        "localization": "localization",
+        "render_mode": "render",
+    }
+    repeated = sorted(own.keys() & (env_options or {}).keys())
     if repeated:
+        instead = ", ".join(f"{own[k]}=" for k in repeated)
         raise ValueError(
             f"run_scenario: env_options {repeated} repeat arguments of run_scenario; "
-            "pass them as its keywords"
+            f"pass {instead} instead"
         )
     with _world_build_errors(track):
         env = ConeTrackEnv(

@@ -122,7 +122,7 @@ def _wrapped(values: FloatArray, half: float) -> FloatArray:
     out: FloatArray = np.where(
         values > half, values - turn, np.where(values < -half, values + turn, values)
     )
-    return out
+    return out[()]  # a 0-d result as a numpy scalar, as the other coordinate
 
 
 def wrapped_lon_difference(d_lon_r: float) -> float:

@@ -80,10 +80,13 @@ class Pose2D:
 
 
 def _points_2d(points: ArrayLike, where: str) -> NDArray[np.float64]:
-    """``points`` as (n, 2) floats: (n, 2) as given, (2,) as one row; else a ValueError."""
+    """``points`` as (n, 2) floats: (n, 2) as given, (2,) as one row, none as
+    (0, 2); else a ValueError."""
     p = np.asarray(points, dtype=float)
     if p.shape == (2,):
         return p.reshape(1, 2)
+    if p.size == 0:  # no points, e.g. an empty list
+        return p.reshape(0, 2)
     if p.ndim != 2 or p.shape[1] != 2:
         raise ValueError(f"Pose2D.{where}: points must be (n, 2) [m], got shape {p.shape}")
     return p

@@ -112,7 +112,8 @@ class SpeedController:
             ValueError: an argument is not finite, or ``dt`` is negative: one
                 NaN would stay in the integral and make every later command NaN.
         """
-        if not (math.isfinite(v_ref + speed + a_ff + a_lat) and math.isfinite(dt) and dt >= 0.0):
+        finite = math.isfinite(v_ref) and math.isfinite(speed) and math.isfinite(a_ff)
+        if not (finite and math.isfinite(a_lat) and math.isfinite(dt) and dt >= 0.0):
             raise ValueError(
                 "SpeedController.step: arguments must be finite and dt >= 0, got "
                 f"v_ref={v_ref!r}, speed={speed!r}, dt={dt!r}, a_ff={a_ff!r}, a_lat={a_lat!r}"

@@ -236,11 +236,11 @@ def speed_profile(
     """
     c = config or _DEFAULT_CONFIG
     pts = np.ascontiguousarray(points, dtype=float)
+    if pts.size == 0:  # no waypoints (an empty list too)
+        return np.zeros(0)
     arc = _NO_ARC if s is None else np.ascontiguousarray(s, dtype=float)
     if check:
-        _check_profile_inputs(pts, arc if s is not None and len(pts) else None, v_start, v_end)
-    if len(pts) == 0:
-        return np.zeros(0)
+        _check_profile_inputs(pts, arc if s is not None else None, v_start, v_end)
     limits = kernels.profile_limits(pts, arc, s is not None, *c.limit_settings)
     return profile_speeds(limits, c, v_start, v_end)
 

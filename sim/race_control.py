@@ -23,9 +23,14 @@
   one; so while the car's centre is outside the track, a search of the whole
   centreline (on leaving, then after each ``rejoin_margin_m`` the car moves)
   moves the walk to a stretch ``rejoin_margin_m`` nearer than the one it
-  holds. Progress is the net change of the car's station, so a cut
-  counts the stretch it skipped (positive or negative) and is an off-track
-  event (FS charges 10 s per off-course).
+  holds. A cut is not progress: the stretch it skips, forwards or
+  backwards, is not counted (nor toward a lap's ``min_lap_fraction``, so a
+  lap cut short by more than a quarter does not count); the excursion is an
+  off-track event (FS charges 10 s per off-course). A stretch driven again
+  after a cut backwards counts again.
+* The offset that decides off-track is the perpendicular one, or the
+  distance to the foot point where that is farther: beyond either end of an
+  open centreline the car is not on a track that has ended.
 * Stuck: less than ``stuck_progress_m`` of net progress in ``stuck_time_s``.
 """
 
@@ -53,7 +58,8 @@ class RaceRules:
         stuck_progress_m: net progress below which the car is stuck [m].
         rejoin_margin_m: with the car's centre off the track, its projection
             moves to another stretch of the track that is this much nearer
-            than the one it holds [m].
+            than the one it holds; the whole centreline is searched again
+            each time the car has moved this far [m].
     """
 
     min_lap_fraction: float = 0.75
@@ -190,10 +196,14 @@ class RaceControl:
         # Runs every physics step: plain-float maths, the checks written out.
         p1x, p1y, yaw = pose
         s, lateral, index, tx, ty = self.progress.project_xy(p1x, p1y)
+        lateral = self._offset(p1x, p1y, s, lateral, index)
         if abs(lateral) <= self._half_widths_list[min(index, len(self._half_widths_list) - 1)]:
             self._searched_at = None
         elif self._search_due(p1x, p1y):
-            s, lateral, index, tx, ty = self._nearer_stretch(p1x, p1y, (s, lateral, index, tx, ty))
+            walked = (s, lateral, index, tx, ty)
+            s, lateral, index, tx, ty = self._nearer_stretch(p1x, p1y, walked)
+            if index != walked[2]:
+                self._s_last = s  # a cut: the stretch skipped is not progress
         self._advance_progress(s)
         p0x, p0y = xy_prev
         if (p1x - p0x) * tx + (p1y - p0y) * ty > 0.0:
@@ -218,23 +228,31 @@ class RaceControl:
         """The projection of an off-track centre (px, py): the walk's, or that of
         a stretch found by a whole-centreline search when it is
         ``rejoin_margin_m`` nearer (the walk then goes on from there)."""
-        found = self.progress.project_xy_anew(px, py)
-        if abs(found[1]) < abs(walked[1]) - self.rules.rejoin_margin_m:
-            self.progress.restart_at(found[2])
-            return found
+        s, lateral, index, tx, ty = self.progress.project_xy_anew(px, py)
+        lateral = self._offset(px, py, s, lateral, index)
+        if abs(lateral) < abs(walked[1]) - self.rules.rejoin_margin_m:
+            self.progress.restart_at(index)
+            return s, lateral, index, tx, ty
         return walked
+
+    def _offset(self, px: float, py: float, s: float, lateral: float, index: int) -> float:
+        """The signed offset that decides off-track for (px, py) projected at
+        arc length ``s`` on segment ``index`` with perpendicular ``lateral``:
+        the distance to the foot point where that is farther (beyond either
+        end of an open centreline, or outside a corner), so that a car is
+        not taken to be on a track that has ended."""
+        fx, fy = self.progress.point_at(index, s)
+        distance = math.hypot(px - fx, py - fy)
+        return lateral if distance <= abs(lateral) else math.copysign(distance, lateral)
 
     def is_off_track_at(self, pose: Pose2D) -> bool:
         """Whether the car with its CG at ``pose`` is off the track (all four
         footprint corners beyond one boundary), without recording anything:
         the pose is projected from scratch and the tracker's last segment,
-        where the next step's projection starts, is kept. The lateral offset
-        is the distance to the foot point, so that beyond either end of an
-        open centreline (or outside a corner) the car is not taken to be on a
-        track that has ended."""
+        where the next step's projection starts, is kept (the offset as
+        ``update`` takes it, :meth:`_offset`)."""
         s, lateral, index, tx, ty = self.progress.project_xy_anew(pose.x, pose.y)
-        fx, fy = self.progress.point_at(index, s)
-        lateral = math.copysign(max(abs(lateral), math.hypot(pose.x - fx, pose.y - fy)), lateral)
+        lateral = self._offset(pose.x, pose.y, s, lateral, index)
         return self._off(lateral, index, tx, ty, pose.yaw)
 
     def _off(self, lateral: float, index: int, tx: float, ty: float, yaw: float) -> bool:

@@ -9,8 +9,10 @@ from envs.runner import run_scenario
 
 def test_env_options_may_not_repeat_run_scenario_arguments() -> None:
     """A field run_scenario sets itself, repeated in env_options, is one clear error."""
-    with pytest.raises(ValueError, match=r"env_options \['laps'\] repeat arguments"):
+    with pytest.raises(ValueError, match=r"env_options \['laps'\] repeat .* pass laps= instead"):
         run_scenario("acceleration", env_options={"laps": 2})
+    with pytest.raises(ValueError, match="pass render= instead"):
+        run_scenario("acceleration", env_options={"render_mode": "human"})
 
 
 def test_env_options_reach_the_env() -> None:

@@ -18,6 +18,7 @@ def test_points_map_into_the_parent_frame_and_back() -> None:
     assert_allclose(parent, [[1.0, 3.0], [0.0, 2.0]], atol=1e-12)
     assert_allclose(pose.inverse_transform_points(parent), [[1.0, 0.0], [0.0, 1.0]], atol=1e-12)
     assert_allclose(pose.transform_points([1.0, 0.0]), [[1.0, 3.0]], atol=1e-12)  # one point
+    assert pose.transform_points([]).shape == (0, 2)  # none
 
 
 @pytest.mark.parametrize("shape", [(2, 3), (4,), (2, 2, 2)])

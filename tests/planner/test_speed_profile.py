@@ -209,6 +209,12 @@ def test_jerk_limit_on_a_curvature_ramp() -> None:
     assert jerk_limit(kappa, 0.5, SpeedProfileConfig(lateral_jerk_max=math.inf)) is None
 
 
+def test_no_waypoints_give_no_speeds() -> None:
+    """An empty list or (0, 2) array of waypoints: no speeds, whatever s says."""
+    assert speed_profile([]).shape == (0,)  # type: ignore[arg-type]
+    assert speed_profile(np.zeros((0, 2)), s=np.zeros(1)).shape == (0,)
+
+
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [

@@ -183,7 +183,7 @@ def test_delaunay_edges_in_scipy_neighbour_order() -> None:
     angle = np.linspace(0.0, 2.0 * np.pi, 40, endpoint=False)
     fan = np.vstack([[0.0, 0.0], np.column_stack([np.cos(angle), np.sin(angle)])])
     samples = [rng.uniform(0.0, 30.0, (n, 2)) for n in (3, 10, 40)]
-    # A vertex with 40 neighbours above it: the lists' capacity grows (twice).
+    # A vertex with 40 neighbours above it: the lists' capacity grows (three times: 8, 16, 32, 64).
     for points in [*samples, fan + rng.normal(0.0, 1e-3, fan.shape)]:
         n = len(points)
         indptr, indices = Delaunay(points).vertex_neighbor_vertices

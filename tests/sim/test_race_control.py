@@ -174,13 +174,13 @@ def cut_across_the_infield(rc: RaceControl) -> list[bool]:
 
 def test_a_cut_across_the_infield_rejoins_the_other_straight() -> None:
     """Off the track, the projection moves to the straight the car crosses to
-    once that is 1 m nearer (y > 15.5), and progress is the net change of
-    station: 30 m, the 147.1 m skipped (50 m, a semicircle's chords, 50 m), and
-    10 m. One excursion: the body leaves at y > 2 + 1.45 and is back at y > 26.55."""
+    once that is 1 m nearer (y > 15.5); the 147.1 m the cut skips (50 m, a
+    semicircle's chords, 50 m) are not progress: 30 m before it and 10 m after.
+    One excursion: the body leaves at y > 2 + 1.45 and is back at y > 26.55."""
     rc = stadium_control()
     off = cut_across_the_infield(rc)
-    arc = ARC_SEGMENTS * 30.0 * math.sin(math.pi / (2 * ARC_SEGMENTS))
-    assert_allclose(rc.state.progress_m, 30.0 + (50.0 + arc + 50.0) + 10.0, atol=1e-9)
+    assert rc.progress.project_xy(40.0, 30.0)[2] > 200 + ARC_SEGMENTS  # on the top straight
+    assert_allclose(rc.state.progress_m, 30.0 + 10.0, atol=1e-9)
     events = rc.state.off_track
     assert len(events) == 1 and events[0].end is not None
     # Steps of 0.05 m from y = 0 at k = 600 (0.01 s each): out at 3.45 m, back at 26.55 m.
@@ -196,6 +196,30 @@ def test_without_rejoining_the_walk_holds_the_straight_it_left() -> None:
     off = cut_across_the_infield(rc)
     assert off[-1]
     assert_allclose(rc.state.progress_m, 30.0 - 10.0, atol=1e-9)
+
+
+def test_beyond_the_end_of_an_open_centreline_is_off_the_track() -> None:
+    """Along the axis of an open straight (0 to 100 m, 4 m wide) past its end:
+    off once every corner is 2 m beyond it, the CG at 100 + 2 + 0.7 m (the
+    car's half width across the axis: the corners' offsets along the normal)."""
+    x = np.arange(0.0, 100.5, 0.5)
+    rc = RaceControl(
+        np.column_stack([x, np.zeros_like(x)]),
+        False,
+        half_widths=np.full(len(x), 2.0),
+        start_finish=np.array([[10.0, -2.0], [10.0, 2.0]]),
+        lap_length=90.0,
+        car_length=2.9,
+        car_width=1.4,
+    )
+    poses = [Pose2D(px, 0.0, 0.0) for px in np.arange(90.0, 110.0, 0.01)]
+    rc.start(0.0, poses[0])
+    for k in range(1, len(poses)):
+        rc.update((k - 1) * 0.01, k * 0.01, poses[k - 1], poses[k])
+    events = rc.state.off_track
+    assert len(events) == 1 and events[0].end is None
+    assert_allclose(poses[round(events[0].start / 0.01)].x, 102.7, atol=0.011)
+    assert rc.is_off_track_at(poses[-1]) and not rc.is_off_track_at(Pose2D(101.0, 0.0, 0.0))
 
 
 def test_segment_crossing_fraction() -> None:
