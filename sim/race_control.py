@@ -23,11 +23,11 @@
   one; so while the car's centre is outside the track, a search of the whole
   centreline (on leaving, then after each ``rejoin_margin_m`` the car moves)
   moves the walk to a stretch ``rejoin_margin_m`` nearer than the one it
-  holds. A cut is not progress: the stretch it skips, forwards or
-  backwards, is not counted (nor toward a lap's ``min_lap_fraction``, so a
-  lap cut short by more than a quarter does not count); the excursion is an
-  off-track event (FS charges 10 s per off-course). A stretch driven again
-  after a cut backwards counts again.
+  holds. A cut never pays: the stretch it skips forwards is not progress
+  (nor toward a lap's ``min_lap_fraction``, so a lap cut short by more than
+  a quarter does not count), one it skips backwards is taken off (driving
+  it again earns it back), and the excursion is an off-track event (FS
+  charges 10 s per off-course).
 * The offset that decides off-track is the perpendicular one, or the
   distance to the foot point where that is farther: beyond either end of an
   open centreline the car is not on a track that has ended.
@@ -202,8 +202,8 @@ class RaceControl:
         elif self._search_due(p1x, p1y):
             walked = (s, lateral, index, tx, ty)
             s, lateral, index, tx, ty = self._nearer_stretch(p1x, p1y, walked)
-            if index != walked[2]:
-                self._s_last = s  # a cut: the stretch skipped is not progress
+            if index != walked[2]:  # a cut across the infield
+                self._advance_progress(s, cut=True)
         self._advance_progress(s)
         p0x, p0y = xy_prev
         if (p1x - p0x) * tx + (p1y - p0y) * ty > 0.0:
@@ -271,14 +271,16 @@ class RaceControl:
             below += lat < -half
         return above == 4 or below == 4
 
-    def _advance_progress(self, s: float) -> None:
+    def _advance_progress(self, s: float, cut: bool = False) -> None:
+        """Add the change of station to ``s`` [m] (the short way round a loop);
+        for a ``cut``, only a loss: a cut never pays."""
         assert self._s_last is not None, "RaceControl.start() must be called first"
         ds = s - self._s_last
         if self.progress.closed:
             length = self.progress.length
             half = 0.5 * length
             ds = (ds + half) % length - half
-        self.state.progress_m += ds
+        self.state.progress_m += min(ds, 0.0) if cut else ds
         self._s_last = s
 
     def _crossed(

@@ -188,6 +188,26 @@ def test_a_cut_across_the_infield_rejoins_the_other_straight() -> None:
     assert not any(off[-200:])
 
 
+def test_a_cut_backwards_takes_off_the_stretch_it_skips() -> None:
+    """From the top straight at x = 60 (driving -x) 10 m to x = 50, across the
+    infield down to the bottom straight, then 10 m along it: the 147.1 m
+    skipped backwards are taken off (10 - 147.1 + 10 m), so that driving them
+    again only earns them back."""
+    rc = stadium_control()
+    legs = [
+        [Pose2D(x, 30.0, math.pi) for x in np.arange(60.0, 50.0, -0.05)],
+        [Pose2D(50.0, y, -math.pi / 2) for y in np.arange(30.0, 0.0, -0.05)],
+        [Pose2D(x, 0.0, 0.0) for x in np.arange(50.0, 60.01, 0.05)],
+    ]
+    poses = [p for leg in legs for p in leg]
+    rc.start(0.0, poses[0])
+    for k in range(1, len(poses)):
+        rc.update((k - 1) * 0.01, k * 0.01, poses[k - 1], poses[k])
+    arc = ARC_SEGMENTS * 30.0 * math.sin(math.pi / (2 * ARC_SEGMENTS))
+    assert_allclose(rc.state.progress_m, 10.0 - (50.0 + arc + 50.0) + 10.0, atol=1e-9)
+    assert len(rc.state.off_track) == 1
+
+
 def test_without_rejoining_the_walk_holds_the_straight_it_left() -> None:
     """The same cut with the rejoin margin out of reach: the walk stays on
     y = 0, the car counts as off track to the end, and the 10 m driven along
