@@ -24,7 +24,10 @@ class Projection:
 
     Attributes:
         s: arc length of the foot point from the polyline's start [m].
-        lateral: signed distance, left of the driving direction positive [m].
+        lateral: signed distance to the foot point, left of the driving
+            direction positive [m]: the perpendicular offset, or, where the
+            foot is a segment's end (beyond either end of an open polyline,
+            outside a corner), the distance to that end.
         index: segment index of the foot point.
         tangent: (2,) unit tangent of that segment.
     """
@@ -100,14 +103,10 @@ class PolylineProgress:
         self._last = seg
         t = self._tangents[seg]
         r = p - foot[k]
-        lateral = float(t[0] * r[1] - t[1] * r[0])
+        lateral = _offset(
+            float(t[0] * r[1] - t[1] * r[0]), float(d2[k]), float(u[k]), self._lengths_list[seg]
+        )
         return Projection(float(self._s0[seg] + u[k]), lateral, seg, (float(t[0]), float(t[1])))
-
-    def point_at(self, index: int, s: float) -> tuple[float, float]:
-        """The point at arc length ``s`` [m] on segment ``index`` (a projection's foot)."""
-        sx, sy, tx, ty, _ = self._segments[index]
-        u = s - self._s0_list[index]
-        return sx + tx * u, sy + ty * u
 
     def restart_at(self, index: int) -> None:
         """Go on walking from segment ``index`` (as if the last answer had been there)."""
@@ -161,7 +160,8 @@ class PolylineProgress:
                 i, best_d2, best_u, best_lat = j, d2, u, tx * fy - ty * fx
         self._last = i
         tx, ty = self._tangents_list[i]
-        return self._s0_list[i] + best_u, best_lat, i, tx, ty
+        lateral = _offset(best_lat, best_d2, best_u, self._lengths_list[i])
+        return self._s0_list[i] + best_u, lateral, i, tx, ty
 
     def _foot(self, i: int, px: float, py: float) -> tuple[float, float, float]:
         """Distance^2 to segment i, the foot's arc position u, and lateral offset."""
@@ -191,9 +191,21 @@ class PolylineProgress:
                     break
                 i, best = j, cand
         self._last = i
-        _, u, lateral = best
+        d2, u, lateral = best
         t = self._tangents_list[i]
-        return Projection(self._s0_list[i] + u, lateral, i, t)
+        return Projection(
+            self._s0_list[i] + u, _offset(lateral, d2, u, self._lengths_list[i]), i, t
+        )
+
+
+def _offset(lateral: float, d2: float, u: float, length: float) -> float:
+    """The signed offset of a point from its foot at ``u`` on a segment of
+    ``length`` [m]: ``lateral`` (perpendicular) with the foot inside the
+    segment, else the distance sqrt(``d2``) to the end it lies at, with
+    ``lateral``'s sign (a car past an open polyline's end is that far off it)."""
+    if 0.0 < u < length:
+        return lateral
+    return math.copysign(math.sqrt(d2), lateral)
 
 
 def segment_crossing(

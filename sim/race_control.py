@@ -28,9 +28,9 @@
   a quarter does not count), one it skips backwards is taken off (driving
   it again earns it back), and the excursion is an off-track event (FS
   charges 10 s per off-course).
-* The offset that decides off-track is the perpendicular one, or the
-  distance to the foot point where that is farther: beyond either end of an
-  open centreline the car is not on a track that has ended.
+* The offset that decides off-track is the projection's (``Projection.lateral``):
+  the perpendicular one, or beyond either end of an open centreline the
+  distance to that end, so the car is not on a track that has ended.
 * Stuck: less than ``stuck_progress_m`` of net progress in ``stuck_time_s``.
 """
 
@@ -196,7 +196,6 @@ class RaceControl:
         # Runs every physics step: plain-float maths, the checks written out.
         p1x, p1y, yaw = pose
         s, lateral, index, tx, ty = self.progress.project_xy(p1x, p1y)
-        lateral = self._offset(p1x, p1y, s, lateral, index)
         if abs(lateral) <= self._half_widths_list[min(index, len(self._half_widths_list) - 1)]:
             self._searched_at = None
         elif self._search_due(p1x, p1y):
@@ -229,30 +228,17 @@ class RaceControl:
         a stretch found by a whole-centreline search when it is
         ``rejoin_margin_m`` nearer (the walk then goes on from there)."""
         s, lateral, index, tx, ty = self.progress.project_xy_anew(px, py)
-        lateral = self._offset(px, py, s, lateral, index)
         if abs(lateral) < abs(walked[1]) - self.rules.rejoin_margin_m:
             self.progress.restart_at(index)
             return s, lateral, index, tx, ty
         return walked
 
-    def _offset(self, px: float, py: float, s: float, lateral: float, index: int) -> float:
-        """The signed offset that decides off-track for (px, py) projected at
-        arc length ``s`` on segment ``index`` with perpendicular ``lateral``:
-        the distance to the foot point where that is farther (beyond either
-        end of an open centreline, or outside a corner), so that a car is
-        not taken to be on a track that has ended."""
-        fx, fy = self.progress.point_at(index, s)
-        distance = math.hypot(px - fx, py - fy)
-        return lateral if distance <= abs(lateral) else math.copysign(distance, lateral)
-
     def is_off_track_at(self, pose: Pose2D) -> bool:
         """Whether the car with its CG at ``pose`` is off the track (all four
         footprint corners beyond one boundary), without recording anything:
         the pose is projected from scratch and the tracker's last segment,
-        where the next step's projection starts, is kept (the offset as
-        ``update`` takes it, :meth:`_offset`)."""
-        s, lateral, index, tx, ty = self.progress.project_xy_anew(pose.x, pose.y)
-        lateral = self._offset(pose.x, pose.y, s, lateral, index)
+        where the next step's projection starts, is kept."""
+        _, lateral, index, tx, ty = self.progress.project_xy_anew(pose.x, pose.y)
         return self._off(lateral, index, tx, ty, pose.yaw)
 
     def _off(self, lateral: float, index: int, tx: float, ty: float, yaw: float) -> bool:

@@ -242,6 +242,17 @@ def test_beyond_the_end_of_an_open_centreline_is_off_the_track() -> None:
     assert rc.is_off_track_at(poses[-1]) and not rc.is_off_track_at(Pose2D(101.0, 0.0, 0.0))
 
 
+def test_lateral_is_the_distance_to_the_foot_point() -> None:
+    """On a straight from (0, 0) to (10, 0): (5, 2) is 2 m left; (13, 4), past
+    the end, is 5 m from it (3-4-5), with the side's sign; (-3, -4) is -5 m."""
+    line = np.column_stack([np.arange(0.0, 10.5, 0.5), np.zeros(21)])
+    for point, lateral in (((5.0, 2.0), 2.0), ((13.0, 4.0), 5.0), ((-3.0, -4.0), -5.0)):
+        walked, fresh = PolylineProgress(line, closed=False), PolylineProgress(line, closed=False)
+        walked.project((5.0, 0.0))  # the next query walks
+        assert walked.project_xy(*point)[1] == pytest.approx(lateral, abs=1e-12)
+        assert fresh.project(point).lateral == pytest.approx(lateral, abs=1e-12)
+
+
 def test_segment_crossing_fraction() -> None:
     """A step from (0,-1) to (0,3) crosses the x axis a quarter of the way."""
     u = segment_crossing(
