@@ -32,15 +32,14 @@ from __future__ import annotations
 
 import argparse
 import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
-from typing import Any
 
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 
 from envs.cone_track_env import ConeTrackEnv
 from envs.runner import run_scenario
+
+from timing import timed_calls
 
 STEPS = 1500
 
@@ -131,36 +130,6 @@ def lap_ratios() -> None:
         )
 
 
-@contextmanager
-def timed_filterpy() -> Iterator[dict[str, float]]:
-    """Accumulate the CPU time [s] and the calls of filterpy's EKF ``predict`` and ``update``.
-
-    Yields a dict with ``time``, ``predict`` and ``update`` (counts), updated
-    as the calls happen; the methods are put back on exit.
-    """
-    tally = {"time": 0.0, "predict": 0, "update": 0}
-    originals = {name: getattr(ExtendedKalmanFilter, name) for name in ("predict", "update")}
-
-    def timed(name: str, method: Callable[..., Any]) -> Callable[..., Any]:
-        def call(*args: Any, **kwargs: Any) -> Any:
-            t0 = time.process_time()
-            try:
-                return method(*args, **kwargs)
-            finally:
-                tally["time"] += time.process_time() - t0
-                tally[name] += 1
-
-        return call
-
-    try:
-        for name, method in originals.items():
-            setattr(ExtendedKalmanFilter, name, timed(name, method))
-        yield tally
-    finally:
-        for name, method in originals.items():
-            setattr(ExtendedKalmanFilter, name, method)
-
-
 def filterpy_floor() -> None:
     """Section 4: filterpy's own time in the loop and the ceilings it alone sets.
 
@@ -171,7 +140,8 @@ def filterpy_floor() -> None:
     (this one also predicts to each update's stamp, off the IMU's grid, and
     replays late fixes); that count at the measured cost per call is printed.
     """
-    with timed_filterpy() as tally:
+    targets = [(ExtendedKalmanFilter, "predict"), (ExtendedKalmanFilter, "update")]
+    with timed_calls(targets, time.process_time) as tally:
         rate, phys, _ = env_rate("rtk", "fused")
     calls = tally["predict"] + tally["update"]
     per_step = tally["time"] / STEPS  # [s] filterpy per env step

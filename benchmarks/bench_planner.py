@@ -9,6 +9,15 @@
    numba) are compiled on their first call, or loaded from numba's cache, and
    neither belongs in a per-detection latency (the autopilot does it when it
    is built: ``planner.autopilot.warm_up_planner``).
+1b. The floor scipy sets: the same runs again with the planner's two scipy
+   calls timed where they happen (``timing.timed_calls`` on
+   ``planner.bridges.Delaunay`` and ``planner.spline.splprep``): qhull's
+   triangulation of every cone in view with its virtual partners (the seed's
+   and the issue's "Delaunay on all of them") and the spline fit through the
+   midpoints. Per size: the points triangulated, each call's mean time, the
+   median per detection of the two together ("scipy") and of everything else
+   ("rest": the frame tree, the projection, the compiled steps, the
+   messages), and what scipy alone leaves of the 0.5 ms median.
 2. Midline accuracy on each shipped track: the car is put on the global path
    every metre for one lap (exact pose in the frame tree), the cones are seen
    by ``sim.sensors.ConeDetector`` with the ``ideal`` and the default noisy
@@ -37,6 +46,8 @@ from localization.pose import Pose2D
 from planner import MidlineConfig, PathProjector, classify_cones_by_side, reference_path_planning
 from planner.classify import ClassifiedCones
 from planner.midline import PlanStatus
+
+from timing import timed_calls
 
 FloatArray = NDArray[np.float64]
 VIEW = 30.0  # [m] cones ahead of the sensor in the latency scenes
@@ -68,12 +79,19 @@ def winding_track(n_view: int, width: float = 3.5) -> tuple[FloatArray, FloatArr
     return centre, np.vstack([pts + 0.5 * width * nrm, pts - 0.5 * width * nrm])
 
 
-def latency(n_view: int, repeats: int) -> tuple[FloatArray, FloatArray, float]:
-    """Per-detection times [ms] of classification and of planning; mean cones in view."""
+def latency(
+    n_view: int, repeats: int, scipy: dict[str, float] | None = None
+) -> tuple[FloatArray, FloatArray, float, FloatArray, FloatArray]:
+    """Per-detection times [ms] of classification and planning; mean cones in view.
+
+    With ``scipy``, the tally of ``timing.timed_calls`` on the planner's
+    scipy calls, also each detection's time in them [ms] and the points given
+    to ``Delaunay`` (empty arrays without it).
+    """
     centre, cones = winding_track(n_view)
     projector = PathProjector(global_path_from_centreline(centre, closed=False))
     config = MidlineConfig(max_range=VIEW + 2.0)
-    t_cls, t_plan, seen = [], [], []
+    t_cls, t_plan, seen, t_scipy, triangulated = [], [], [], [], []
     positions = np.linspace(10, len(centre) - 100, repeats).astype(int)
     for i in positions:
         d = centre[i + 1] - centre[i]
@@ -85,6 +103,7 @@ def latency(n_view: int, repeats: int) -> tuple[FloatArray, FloatArray, float]:
             Header(1.0, "os_sensor"), np.column_stack([local, np.zeros(len(local))])
         )
         buffer = frame_tree(pose)
+        before = 0.0 if scipy is None else scipy["time"]
         t0 = time.perf_counter()
         classified = classify_cones_by_side(det, buffer, projector)
         t1 = time.perf_counter()
@@ -94,7 +113,47 @@ def latency(n_view: int, repeats: int) -> tuple[FloatArray, FloatArray, float]:
         t_cls.append(t1 - t0)
         t_plan.append(t2 - t1)
         seen.append(len(det))
-    return 1e3 * np.array(t_cls), 1e3 * np.array(t_plan), float(np.mean(seen))
+        if scipy is not None:
+            t_scipy.append(scipy["time"] - before)
+            triangulated.append(len(plan.cones))
+    return (
+        1e3 * np.array(t_cls),
+        1e3 * np.array(t_plan),
+        float(np.mean(seen)),
+        1e3 * np.array(t_scipy),
+        np.array(triangulated, dtype=float),
+    )
+
+
+def scipy_floor(repeats: int) -> None:
+    """Section 1b: the time in scipy's own calls per detection, and what it leaves.
+
+    The planner's two scipy calls (``Delaunay`` on every cone in view and its
+    virtual partners; ``splprep`` through the midpoints), which the issue and
+    the seed name, are timed inside the same runs as section 1 (the same
+    scenes, data and cache state); "rest" is everything else per detection:
+    the frame tree, the projection, the compiled steps, the messages.
+    """
+    import planner.bridges
+    import planner.spline
+
+    print("\n== scipy's own calls in the same runs (Delaunay, splprep) per detection [ms]")
+    print(f"{'cones':>6} {'triangulated':>13} {'Delaunay mean':>13} {'splprep mean':>12} "
+          f"{'scipy med':>10} {'rest med':>9} {'total med':>10}  "
+          "target total med <= 0.5")  # fmt: skip
+    targets = [(planner.bridges, "Delaunay"), (planner.spline, "splprep")]
+    for n in (20, 40, 80):
+        latency(n, 20)  # warm-up
+        with timed_calls(targets) as tally:
+            t_cls, t_plan, _, t_scipy, points = latency(n, repeats, tally)
+        total = t_cls + t_plan
+        calls = {name: max(tally[name], 1) for name in ("Delaunay", "splprep")}
+        per_call = {name: 1e3 * tally[f"{name}_time"] / calls[name] for name in calls}
+        floor = float(np.median(t_scipy))
+        print(f"{n:>6} {np.mean(points):>13.1f} {per_call['Delaunay']:>13.3f} "
+              f"{per_call['splprep']:>12.3f} {floor:>10.3f} {np.median(total - t_scipy):>9.3f} "
+              f"{np.median(total):>10.3f}  scipy alone leaves {0.5 - floor:+.3f} "
+              "for the rest")  # fmt: skip
 
 
 def distance_to_polyline(points: FloatArray, line: FloatArray, closed: bool) -> FloatArray:
@@ -161,10 +220,11 @@ def main() -> None:
           f"{'total med':>10} {'total p99':>10}  targets: med <= 0.5, p99 <= 2")  # fmt: skip
     for n in (20, 40, 80):
         latency(n, 20)  # warm-up
-        t_cls, t_plan, seen = latency(n, repeats)
+        t_cls, t_plan, seen, _, _ = latency(n, repeats)
         total = t_cls + t_plan
         print(f"{n:>6} {seen:>8.1f} {np.median(t_cls):>13.3f} {np.median(t_plan):>9.3f} "
               f"{np.median(total):>10.3f} {np.percentile(total, 99):>10.3f}")  # fmt: skip
+    scipy_floor(repeats)
 
     print("\n== midline accuracy against the true centreline, one lap of views [m]")
     print(f"{'track':>13} {'detector':>9} {'RMSE':>7} {'max':>6} {'views':>6} {'no path':>8}"

@@ -1,0 +1,53 @@
+"""Time a library's own calls inside a run: shared by the benchmarks.
+
+``timed_calls`` swaps attributes (methods of a class, functions a module
+imported) for wrappers that add each call's time to a tally, and puts the
+originals back on exit. The benchmarks use it to show the floor that a
+library the design card names sets (filterpy's EKF in ``bench_env``,
+scipy's Delaunay and splprep in ``bench_planner``), measured in the real
+run, on its real data, with its real cache state.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
+from typing import Any
+
+
+@contextmanager
+def timed_calls(
+    targets: Iterable[tuple[object, str]], clock: Callable[[], float] = time.perf_counter
+) -> Iterator[dict[str, float]]:
+    """Accumulate the time [s] and the count of calls to ``owner.name`` for each target.
+
+    Yields a dict with ``time`` (all targets together), and per name its
+    calls and ``<name>_time`` [s], updated as the calls happen; the
+    attributes are put back on exit, also after an error.
+    """
+    tally: dict[str, float] = {"time": 0.0}
+    originals = [(owner, name, getattr(owner, name)) for owner, name in targets]
+
+    def timed(name: str, function: Callable[..., Any]) -> Callable[..., Any]:
+        def call(*args: Any, **kwargs: Any) -> Any:
+            t0 = clock()
+            try:
+                return function(*args, **kwargs)
+            finally:
+                spent = clock() - t0
+                tally["time"] += spent
+                tally[f"{name}_time"] += spent
+                tally[name] += 1
+
+        return call
+
+    try:
+        for owner, name, function in originals:
+            tally[name] = 0
+            tally[f"{name}_time"] = 0.0
+            setattr(owner, name, timed(name, function))
+        yield tally
+    finally:
+        for owner, name, function in originals:
+            setattr(owner, name, function)
