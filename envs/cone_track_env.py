@@ -251,6 +251,7 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
             self.config.observation,
             published=self.stack.published_pose() if dict_pose else None,
             awaiting_estimate=estimate is None and self.stack.localization == "fused",
+            now=self.stack.world.time,
         )
 
     def _score_counts(self) -> dict[str, float]:

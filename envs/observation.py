@@ -22,7 +22,12 @@ in ``fused`` mode the EKF's estimate now and its covariance; in ``raw`` and
 ``truth`` mode the pose the frame tree holds (the broadcaster's last
 ``reference -> gps_antenna``) with a zero covariance. ``pose_valid`` is 1 when
 there is a pose, 0 before the first one (the filter not yet initialised, no
-broadcast yet), when ``pose`` and ``pose_covariance`` are zeros. Every value
+broadcast yet), when ``pose`` and ``pose_covariance`` are zeros.
+``cones_age`` [s] is how old the cone detection is: the simulation time now
+minus its stamp (the scan's capture time), so the detector's latency (rtk:
+0.2 s, fssim's LiDAR) plus the time since it arrived; ``AGE_BOUND`` (1000 s)
+before the first detection. A policy that drives on the cones can read from
+it how far the car has moved since they were seen. Every value
 is clipped into the space's bounds so ``observation_space.contains(obs)``
 always holds.
 """
@@ -46,6 +51,7 @@ EGO_LOW = np.array([-5.0, -10.0, -1.0, -1.0, 0.0, 0.0], dtype=np.float32)
 EGO_HIGH = np.array([60.0, 10.0, 1.0, 1.0, 1e3, math.pi], dtype=np.float32)
 CONE_BOUND = 100.0  # [m] beyond any detector's range
 POSE_BOUND = 1e5  # [m]
+AGE_BOUND = 1e3  # [s] the detection's age before there is one
 
 
 def observation_space(max_cones: int, mode: str) -> spaces.Space[Any]:
@@ -71,6 +77,7 @@ def observation_space(max_cones: int, mode: str) -> spaces.Space[Any]:
             ),
             "pose_covariance": spaces.Box(-1e6, 1e6, (3, 3), dtype=np.float32),
             "pose_valid": spaces.Box(0.0, 1.0, (1,), dtype=np.float32),
+            "cones_age": spaces.Box(0.0, AGE_BOUND, (1,), dtype=np.float32),
         }
     )
 
@@ -107,6 +114,7 @@ def build_observation(
     *,
     published: Pose2D | None = None,
     awaiting_estimate: bool = False,
+    now: float = 0.0,
 ) -> NDArray[np.float32] | dict[str, NDArray[np.float32]]:
     """The observation for the current step (see the module docstring).
 
@@ -114,6 +122,7 @@ def build_observation(
     no ``estimate`` (``raw`` and ``truth`` localization).
     ``awaiting_estimate``: a filter runs but has no estimate yet, so the
     uncertainties are their upper bounds, not the 0 of "no filter".
+    ``now``: the simulation time [s], for the detection's age in dict mode.
     """
     if estimate is None and awaiting_estimate:
         speed, yaw_rate = memory.wheel_speed, memory.yaw_rate
@@ -146,6 +155,9 @@ def build_observation(
     else:
         at = published
     xyz = (0.0, 0.0, 0.0) if at is None else (at.x, at.y, at.yaw)
+    det = memory.detections
+    age = AGE_BOUND if det is None else now - det.header.stamp
+    age = min(max(age, 0.0), AGE_BOUND) if math.isfinite(age) else AGE_BOUND
     pose = np.array(xyz, dtype=np.float32)
     return {
         "ego": ego,
@@ -157,6 +169,7 @@ def build_observation(
         ).astype(np.float32),
         "pose_covariance": np.clip(pose_cov, -1e6, 1e6).astype(np.float32),
         "pose_valid": np.array([0.0 if at is None else 1.0], dtype=np.float32),
+        "cones_age": np.array([age], dtype=np.float32),
     }
 
 

@@ -327,6 +327,27 @@ def test_dict_pose_in_every_localization_mode() -> None:
         env.close()
 
 
+def test_dict_cones_age_is_the_detections_latency_plus_time_since_arrival() -> None:
+    """Dict mode's ``cones_age``: 10 Hz scans observed at 50 Hz. ideal (no
+    latency, a scan at t = 0): 0, 0.02, ..., 0.08 s, then the next scan.
+    rtk (fssim's 0.2 s LiDAR latency): 1000 s (no detection yet) until the
+    first scan arrives at t = 0.2 s, then 0.2, 0.22, ..., 0.28 s."""
+    expected = {
+        "ideal": [0.0, 0.02, 0.04, 0.06, 0.08] * 3,
+        "rtk": [1e3] * 10 + [0.2, 0.22, 0.24, 0.26, 0.28],
+    }
+    for sensors, ages in expected.items():
+        env = ConeTrackEnv(sensors=sensors, observation="dict")
+        obs, _ = env.reset(seed=0)
+        seen = [float(obs["cones_age"][0])]
+        for _ in range(len(ages) - 1):
+            obs, _, _, _, _ = env.step(np.array([0.0, 0.3], dtype=np.float32))
+            seen.append(float(obs["cones_age"][0]))
+        assert_allclose(seen, ages, atol=1e-6, err_msg=sensors)
+        assert env.observation_space.contains(obs)
+        env.close()
+
+
 def test_config_types_numpy_integers_yes_bools_and_strings_no() -> None:
     """A numpy integer is an integer (parameter sweeps); a bool is not a lap
     count, a string is not a flag, a list is not a set of reward weights."""
