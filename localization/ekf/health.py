@@ -37,6 +37,7 @@ class RejectReason(StrEnum):
     """Why a message was not used."""
 
     NON_FINITE = "non_finite"  # NaN or inf in a value or a stamp
+    OUT_OF_RANGE = "out_of_range"  # a fix's latitude beyond +-90 or longitude beyond +-180 deg
     NO_FIX = "no_fix"  # NavSatFix with status NO_FIX
     BAD_COVARIANCE = "bad_covariance"  # negative, not symmetric, or not PSD
     WRONG_FRAME = "wrong_frame"  # header.frame_id is not the expected frame

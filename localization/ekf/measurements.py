@@ -5,7 +5,8 @@ raises :class:`InvalidMessage` with a :class:`RejectReason` otherwise:
 
 * the stamp and every value finite (NaN/inf: ``NON_FINITE``);
 * the frame the message must be in (``WRONG_FRAME``);
-* a GPS fix with a position (status NO_FIX: ``NO_FIX``);
+* a GPS fix with a position (status NO_FIX: ``NO_FIX``) on the globe
+  (latitude beyond +-90 or longitude beyond +-180 deg: ``OUT_OF_RANGE``);
 * a stated covariance that is finite, symmetric (to 1e-9 relative) and
   positive semi-definite (``BAD_COVARIANCE``): a negative variance or a
   non-symmetric matrix is a driver bug, not a very sure sensor.
@@ -207,7 +208,9 @@ def from_fix(msg: NavSatFix, cfg: EkfConfig) -> Measurement:
     try:
         point = gps_to_local_cartesian(msg, cfg.origin, cfg.reference_frame)
     except GeodesyError as err:
-        raise InvalidMessage(Sensor.GPS, RejectReason.NON_FINITE, stamp, str(err)) from None
+        finite = math.isfinite(msg.latitude) and math.isfinite(msg.longitude)
+        reason = RejectReason.OUT_OF_RANGE if finite else RejectReason.NON_FINITE
+        raise InvalidMessage(Sensor.GPS, reason, stamp, str(err)) from None
     z = np.array([[point.x], [point.y]])
     return Measurement(Sensor.GPS, stamp, _frozen(z), cov)
 

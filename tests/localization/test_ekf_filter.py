@@ -165,6 +165,9 @@ NON_SYMMETRIC = np.array([[1.0, 0.3, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 4.0]])
 BAD_INPUT: list[tuple[str, Message, Sensor, RejectReason]] = [
     ("fix NaN latitude", bad_fix(latitude=math.nan), Sensor.GPS, RejectReason.NON_FINITE),
     ("fix inf longitude", bad_fix(longitude=math.inf), Sensor.GPS, RejectReason.NON_FINITE),
+    ("fix latitude 91 deg", bad_fix(latitude=91.0), Sensor.GPS, RejectReason.OUT_OF_RANGE),
+    ("fix longitude -180.5 deg", bad_fix(longitude=-180.5), Sensor.GPS,
+     RejectReason.OUT_OF_RANGE),
     ("fix NaN stamp", bad_fix(header=Header(math.nan, FRAME_GPS_ANTENNA)), Sensor.GPS,
      RejectReason.NON_FINITE),
     ("fix NO_FIX", bad_fix(status=NavSatStatus.NO_FIX), Sensor.GPS, RejectReason.NO_FIX),
