@@ -3,7 +3,11 @@
 Prints CPU microseconds per call (``time.process_time``, so other work on a
 shared machine does not count), the median over repeats of ``timeit`` runs, for:
 one lookup at an interpolated time and at time 0 (latest common time), one
-inverse lookup, transforming 50 points, ``lookup_pose2d``, and
+inverse lookup, the time-travel lookup ``lookup_transform_full`` (os_sensor
+at one time into os_sensor 1 s later through reference, two interpolated
+legs) and its 50-point ``transform_points_full`` (beside the same done by
+hand with two ``transform_points`` calls), transforming 50 points,
+``lookup_pose2d``, and
 ``set_transform`` of one dynamic transform into a link whose 10 s cache is
 full (so every insert also prunes one sample). Run: ``python benchmarks/bench_frames.py``.
 """
@@ -85,6 +89,27 @@ def main() -> None:
         (
             "lookup os_sensor<-reference, interpolated time",
             lambda: buffer.lookup_transform("os_sensor", "reference", between),
+        ),
+        (
+            "lookup_transform_full os_sensor 1 s back, interp.",
+            lambda: buffer.lookup_transform_full(
+                "os_sensor", between, "os_sensor", between - 1.0, "reference"
+            ),
+        ),
+        (
+            "transform_points_full 50 x (n, 2), 1 s back",
+            lambda: buffer.transform_points_full(
+                "os_sensor", between, "os_sensor", points[:, :2], between - 1.0, "reference"
+            ),
+        ),
+        (
+            "the same as 2 transform_points via reference",
+            lambda: buffer.transform_points(
+                "os_sensor",
+                "reference",
+                buffer.transform_points("reference", "os_sensor", points[:, :2], between - 1.0),
+                between,
+            ),
         ),
         (
             "transform_points 50 x (n, 3), interpolated time",

@@ -344,18 +344,23 @@ def carry_path_forward(
 ) -> FloatArray | None:
     """The previous plan's path in ``sensor_frame`` at ``time``, from its nearest point on.
 
-    Through the frame tree: ``previous.header.frame_id`` at the previous stamp
-    -> ``reference_frame`` -> ``sensor_frame`` at ``time``. None when there is
+    Through the frame tree's time-travel lookup, with ``reference_frame`` as the
+    fixed frame: ``previous.header.frame_id`` at the previous stamp ->
+    ``reference_frame`` -> ``sensor_frame`` at ``time``. None when there is
     no previous path, the frame tree cannot transform it (e.g. the old stamp
     left the cache), or fewer than two points remain.
     """
     if previous is None or len(previous.path) < 2:
         return None
     try:
-        in_reference = buffer.transform_points(
-            reference_frame, previous.header.frame_id, previous.path, previous.header.stamp
+        moved = buffer.transform_points_full(
+            sensor_frame,
+            time,
+            previous.header.frame_id,
+            previous.path,
+            previous.header.stamp,
+            reference_frame,
         )
-        moved = buffer.transform_points(sensor_frame, reference_frame, in_reference, time)
     except TransformError:
         return None
     nearest = int(np.argmin(np.hypot(moved[:, 0], moved[:, 1])))

@@ -14,6 +14,11 @@ Usage::
         TransformStamped("gps_antenna", "os_sensor", 0.0, translation=(0.0, 0.0, -0.1))
     )
     cones_ref = buffer.transform_points("reference", "os_sensor", cones_sensor, LATEST)
+    # Time travel through the fixed frame: a path planned in os_sensor at t_old,
+    # in os_sensor at t_now.
+    path_now = buffer.transform_points_full(
+        "os_sensor", t_now, "os_sensor", path_old, t_old, "reference"
+    )
 
 Modules: :mod:`.transform` (the stamped transform, composition, 2D helpers),
 :mod:`.rigid` (the float maths of the hot path), :mod:`.cache` (one link's

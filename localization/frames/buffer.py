@@ -17,6 +17,13 @@ Semantics follow tf2's ``BufferCore`` (ros2/geometry2 ``tf2/src/buffer_core.cpp`
   static. The returned transform is stamped with the time actually used.
   Sim time starts at 0 as well, so time 0 always means "latest", never
   "at t = 0 s"; the two agree only until later data arrives.
+- ``lookup_transform_full(target, target_time, source, source_time, fixed)``
+  is tf2's "advanced" (time-travel) lookup: ``(target <- fixed at
+  target_time) ∘ (fixed <- source at source_time)``, each leg a
+  ``lookup_transform`` with its own :data:`LATEST` handling. As tf2's
+  ``BufferCore::lookupTransform`` (ros2/geometry2 ``buffer_core.cpp``), the
+  result has ``frame_id = target`` and ``child_frame_id = source`` and is
+  stamped with the time the target leg used.
 - A leading ``/`` is stripped from every frame name, in inserts and lookups.
   A vehicle prefix (``car1/gps_antenna``) is part of the name, so several
   vehicles' trees can hang under one ``reference`` (tf2 has no ``tf_prefix``).
@@ -45,7 +52,7 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass
-from typing import Final
+from typing import Final, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -57,9 +64,11 @@ from localization.frames.errors import (
     ExtrapolationError,
     FrameNotFoundError,
     FrameTreeError,
+    FullLookup,
     InvalidArgumentError,
     InvalidTransformError,
     TransformError,
+    full_lookup_context,
 )
 from localization.frames.rigid import Rigid
 from localization.frames.transform import (
@@ -113,6 +122,12 @@ class _Chain:
         if not self.dynamic:
             return LATEST
         return min(cache.latest for cache in self.dynamic)
+
+
+def _check_time(time: float, argument: str) -> None:
+    """Raise InvalidArgumentError unless the lookup time ``argument`` is finite."""
+    if not math.isfinite(time):
+        raise InvalidArgumentError(f"{argument} must be finite, got {time!r}")
 
 
 def _accumulate(links: tuple[FrameCache, ...], time: float) -> Rigid:
@@ -303,6 +318,94 @@ class Buffer:
         _, _, a = self._resolve(target_frame, source_frame, time)
         return Pose2D(a[0], a[1], float(wrap_angle(rigid.yaw_of(a))))
 
+    def lookup_transform_full(
+        self,
+        target_frame: str,
+        target_time: float,
+        source_frame: str,
+        source_time: float,
+        fixed_frame: str,
+    ) -> TransformStamped:
+        """Map points in ``source_frame`` at ``source_time`` into ``target_frame`` at
+        ``target_time``, through ``fixed_frame`` (tf2's "advanced" ``lookupTransform``).
+
+        The result is ``(target_frame <- fixed_frame at target_time) ∘
+        (fixed_frame <- source_frame at source_time)``: data stamped at one
+        time, carried to another through a frame that does not move between
+        the two (the world, ``reference``), e.g. the previous local path into
+        the sensor frame of now. Each leg is :meth:`lookup_transform`, so
+        :data:`LATEST` means the latest common time of that leg's own chain.
+        A leg between a frame and itself (``fixed_frame`` is ``source_frame``
+        or ``target_frame``) is the identity; at :data:`LATEST` it is stamped
+        0, as :meth:`lookup_transform` of a frame in itself is here (tf2
+        stamps it with the newest stamp of the frame's link to its parent).
+
+        Args:
+            target_frame: frame the result maps into (its ``frame_id``).
+            target_time: time of ``target_frame`` [s], or :data:`LATEST`.
+            source_frame: frame the result maps from (its ``child_frame_id``).
+            source_time: time of ``source_frame`` [s], or :data:`LATEST`.
+            fixed_frame: the frame both legs meet in, taken as unmoving.
+
+        Returns:
+            The transform, stamped with the time the target leg used
+            (``target_time``, or its latest common time for :data:`LATEST`),
+            as tf2's ``BufferCore`` stamps it.
+
+        Raises:
+            FrameNotFoundError: one of the three frames does not exist.
+            InvalidArgumentError: an empty frame name or a non-finite time
+                (all three frames and both times are checked before any leg).
+            ConnectivityError: ``fixed_frame`` is not in the tree of
+                ``source_frame`` or of ``target_frame``.
+            ExtrapolationError: a dynamic link has no data at a leg's time;
+                the message names the leg, its frames and its time.
+        """
+        target, source, used, a = self._resolve_full(
+            target_frame, target_time, source_frame, source_time, fixed_frame
+        )
+        return TransformStamped.from_rigid(target, source, used, a)
+
+    def can_transform_full(
+        self,
+        target_frame: str,
+        target_time: float,
+        source_frame: str,
+        source_time: float,
+        fixed_frame: str,
+    ) -> bool:
+        """Whether :meth:`lookup_transform_full` would succeed (False instead of raising)."""
+        try:
+            self._resolve_full(target_frame, target_time, source_frame, source_time, fixed_frame)
+        except TransformError:
+            return False
+        return True
+
+    def transform_points_full(  # noqa: PLR0917 (tf2's order, points as in transform_points)
+        self,
+        target_frame: str,
+        target_time: float,
+        source_frame: str,
+        points: ArrayLike,
+        source_time: float,
+        fixed_frame: str,
+    ) -> NDArray[np.float64]:
+        """Map many points in ``source_frame`` at ``source_time`` into ``target_frame``
+        at ``target_time``, through ``fixed_frame``.
+
+        The arguments of :meth:`lookup_transform_full`, with ``points`` after
+        ``source_frame`` as in :meth:`transform_points`: (n, 3) points [m], or
+        (n, 2) points taken at z = 0, returned with the mapped z dropped.
+
+        Raises:
+            The errors of :meth:`lookup_transform_full`, and
+            InvalidArgumentError if ``points`` has another shape.
+        """
+        _, _, _, a = self._resolve_full(
+            target_frame, target_time, source_frame, source_time, fixed_frame
+        )
+        return transform_points_rigid(a, points)
+
     def latest_common_time(self, target_frame: str, source_frame: str) -> float:
         """The time a :data:`LATEST` lookup between the two frames would use [s]."""
         return self._chain(target_frame, source_frame).latest_common_time()
@@ -314,8 +417,7 @@ class Buffer:
         chain = self._chains.get((target_frame, source_frame))
         if chain is None:
             chain = self._chain(target_frame, source_frame)
-        if not math.isfinite(time):
-            raise InvalidArgumentError(f"lookup time must be finite, got {time!r}")
+        _check_time(time, "lookup time")
         if time == LATEST:
             time = chain.latest_common_time()
         try:
@@ -325,6 +427,49 @@ class Buffer:
         except ExtrapolationError as err:
             raise err.during_lookup(chain.target, chain.source) from None
         return chain, time, a
+
+    def _resolve_full(
+        self,
+        target_frame: str,
+        target_time: float,
+        source_frame: str,
+        source_time: float,
+        fixed_frame: str,
+    ) -> tuple[str, str, float, Rigid]:
+        """Check the arguments, look up both legs and compose.
+
+        Returns (target, source, the target leg's time, transform); the legs
+        are looked up source first, as tf2 does.
+        """
+        method = "lookup_transform_full"
+        target = self._known(target_frame, "target_frame", method)
+        source = self._known(source_frame, "source_frame", method)
+        fixed = self._known(fixed_frame, "fixed_frame", method)
+        _check_time(target_time, "target_time")
+        _check_time(source_time, "source_time")
+        lookup: FullLookup = (target, target_time, source, source_time, fixed)
+        _, fixed_from_source = self._leg("source", fixed_frame, source_frame, source_time, lookup)
+        used, target_from_fixed = self._leg(
+            "target", target_frame, fixed_frame, target_time, lookup
+        )
+        return target, source, used, rigid.compose(target_from_fixed, fixed_from_source)
+
+    def _leg(
+        self,
+        leg: Literal["source", "target"],
+        target_frame: str,
+        source_frame: str,
+        time: float,
+        lookup: FullLookup,
+    ) -> tuple[float, Rigid]:
+        """One leg of a full lookup: (time used, transform); its errors name the leg."""
+        try:
+            _, used, a = self._resolve(target_frame, source_frame, time)
+        except ExtrapolationError as err:
+            raise err.with_context(full_lookup_context(leg, lookup)) from None
+        except ConnectivityError as err:
+            raise ConnectivityError(f"{err}, {full_lookup_context(leg, lookup)}") from None
+        return used, a
 
     def _chain(self, target_frame: str, source_frame: str) -> _Chain:
         """Resolve (and remember) the links between two frames via their common ancestor."""
@@ -359,14 +504,14 @@ class Buffer:
         self._chains[(target_frame, source_frame)] = chain
         return chain
 
-    def _known(self, frame_id: str, argument: str) -> str:
+    def _known(self, frame_id: str, argument: str, method: str = "lookup_transform") -> str:
         """The stripped name of a frame that exists, else FrameNotFoundError."""
         frame = strip_leading_slash(frame_id)
         if not frame:
             raise InvalidArgumentError(f"{argument} must be a non-empty frame name")
         if frame not in self._frames:
             raise FrameNotFoundError(
-                f"'{frame}' passed to lookup_transform argument {argument} does not exist; "
+                f"'{frame}' passed to {method} argument {argument} does not exist; "
                 f"known frames: {sorted(self._frames)}"
             )
         return frame

@@ -15,7 +15,7 @@ the time range the buffer holds.
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Literal, TypeAlias
 
 Direction = Literal["past", "future"]
 
@@ -98,13 +98,45 @@ class ExtrapolationError(TransformError):
 
     def during_lookup(self, target_frame: str, source_frame: str) -> ExtrapolationError:
         """The same error, with the lookup that ran into it added to the message."""
-        return ExtrapolationError(
-            self.frame,
-            self.parent,
-            self.time,
-            self.earliest,
-            self.latest,
-            context=(
-                f"when looking up transform from frame '{source_frame}' to frame '{target_frame}'"
-            ),
+        return self.with_context(
+            f"when looking up transform from frame '{source_frame}' to frame '{target_frame}'"
         )
+
+    def with_context(self, context: str) -> ExtrapolationError:
+        """The same error with ``context`` (the lookup it happened in) in place of its own."""
+        return ExtrapolationError(
+            self.frame, self.parent, self.time, self.earliest, self.latest, context=context
+        )
+
+
+FullLookup: TypeAlias = tuple[str, float, str, float, str]
+"""A full lookup's arguments (target_frame, target_time, source_frame, source_time, fixed_frame)."""
+
+
+def full_lookup_context(leg: Literal["source", "target"], lookup: FullLookup) -> str:
+    """Which leg of a full (time-travel) lookup failed, and the lookup, for an error message.
+
+    The source leg maps ``source_frame`` at ``source_time`` into
+    ``fixed_frame``; the target leg maps ``fixed_frame`` into ``target_frame``
+    at ``target_time``. A time of 0 is shown as the latest common time it stands for.
+    """
+    target_frame, target_time, source_frame, source_time, fixed_frame = lookup
+
+    def at(time: float) -> str:
+        return f"{time!r} s (latest)" if time == 0.0 else f"{time!r} s"
+
+    if leg == "source":
+        step = (
+            f"the source leg, frame '{source_frame}' at source_time {at(source_time)} "
+            f"into fixed frame '{fixed_frame}'"
+        )
+    else:
+        step = (
+            f"the target leg, fixed frame '{fixed_frame}' into frame '{target_frame}' "
+            f"at target_time {at(target_time)}"
+        )
+    return (
+        f"in {step}, when looking up transform from frame '{source_frame}' at time "
+        f"{at(source_time)} to frame '{target_frame}' at time {at(target_time)} "
+        f"through fixed frame '{fixed_frame}'"
+    )
