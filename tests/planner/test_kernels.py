@@ -25,7 +25,7 @@ from scipy.interpolate import BSpline, splev, splprep
 from scipy.spatial import Delaunay, QhullError
 
 from localization.global_path import global_path_from_centreline
-from planner import MidlineConfig, SpeedProfileConfig, kernels
+from planner import MidlineConfig, SpeedProfileConfig
 from planner.bridges import (
     ConeSet,
     TrackEstimate,
@@ -37,6 +37,8 @@ from planner.bridges import (
     virtual_partners,
 )
 from planner.geometry import PathProjector, StationAxis, arc_length, station_difference
+from planner.kernels._common import wrapped_difference
+from planner.kernels.spline import _spline_at
 from planner.midline import boundary_cones, in_view
 from planner.ordering import start_index
 from planner.speed_profile import (
@@ -325,9 +327,9 @@ def test_station_wrap_is_numpy_remainder() -> None:
         )
         with np.errstate(invalid="ignore"):  # the NaN and inf rows
             expected = station_difference(diff, 0.0, length, True)
-        got = np.array([kernels._wrap(d, length, True) for d in diff])
+        got = np.array([wrapped_difference(d, length, True) for d in diff])
         assert_array_equal(got, expected)
-    assert kernels._wrap(5.0, 0.0, True) == 5.0
+    assert wrapped_difference(5.0, 0.0, True) == 5.0
 
 
 @pytest.mark.parametrize("closed", [True, False])
@@ -595,7 +597,7 @@ def test_spline_evaluation_is_splev_for_every_degree() -> None:
         out = np.empty((len(u), 2))
         prev = k
         for i, x in enumerate(u):
-            prev = kernels._spline_at(tck[0], c, k, x, out, i, prev, work)
+            prev = _spline_at(tck[0], c, k, x, out, i, prev, work)
         assert_array_equal(out, np.column_stack(splev(u, tck)))
 
 
@@ -616,10 +618,11 @@ def test_kernels_are_deterministic() -> None:
 
 
 def test_import_without_a_writable_cache_directory() -> None:
-    """No cache directory numba can write: the planner's (``kernels``, ``fused``) and
-    the EKF's kernels compile uncached, each module with its warning."""
+    """No cache directory numba can write: the planner's (each module of ``kernels``,
+    ``fused``) and the EKF's kernels compile uncached, each module with its warning."""
 
     script = """
+import pkgutil
 import warnings
 import numba.core.caching as caching
 
@@ -633,7 +636,9 @@ with warnings.catch_warnings(record=True) as caught:
     from localization.ekf import kernels as ekf_kernels
 import numpy as np
 owners = {str(w.message).split(":")[0] for w in caught if "no writable cache" in str(w.message)}
-assert owners == {"planner.kernels", "planner.fused", "localization.ekf.kernels"}, caught
+modules = {f"planner.kernels.{m.name}" for m in pkgutil.iter_modules(kernels.__path__)}
+assert len(modules) == 10, modules
+assert owners == modules | {"planner.fused", "localization.ekf.kernels"}, caught
 assert kernels.arc_length(np.array([[0.0, 0.0], [3.0, 4.0]])).tolist() == [0.0, 5.0]
 p = np.array([[1.0, 2.0], [4.0, 3.0]])
 assert ekf_kernels.symmetrised(p).tolist() == [[1.0, 3.0], [3.0, 3.0]]
@@ -648,7 +653,7 @@ def test_building_an_autopilot_loads_every_kernel_the_planning_step_calls() -> N
     argument types, that the warm-up did not already load (a fresh process)."""
 
     script = """
-import dataclasses, math
+import dataclasses, importlib, math, pkgutil
 import numpy as np
 from numba.core.registry import CPUDispatcher
 from localization.frames import Buffer, TransformStamped
@@ -659,9 +664,13 @@ from planner import AutopilotConfig, fused, kernels
 from planner.autopilot import Autopilot
 from planner.midline import PlanStatus
 
+modules = [fused] + [importlib.import_module(f"planner.kernels.{m.name}")
+                     for m in pkgutil.iter_modules(kernels.__path__)]
+
 def loaded():
-    return {k: len(v.signatures) for module in (kernels, fused) for k, v in vars(module).items()
-            if isinstance(v, CPUDispatcher) and v.signatures}
+    return {f"{module.__name__}.{k}": len(v.signatures) for module in modules
+            for k, v in vars(module).items()
+            if isinstance(v, CPUDispatcher) and v.signatures and v.__module__ == module.__name__}
 
 x = np.arange(0.0, 200.0, 0.5)
 centre = np.column_stack([x, 4.0 * np.sin(x / 8.0)])
@@ -692,7 +701,7 @@ for pilot in pilots:
 assert ok > 30, ok
 assert loaded() == after_warm_up, (after_warm_up, loaded())
 assert {"profile_limits", "profile_passes", "spline_path", "project_around", "plan_cones",
-        "plan_midpoints", "window_overlaps"} <= set(loaded())
+        "plan_midpoints", "window_overlaps"} <= {k.rsplit(".", 1)[1] for k in loaded()}
 print("ok")
 """
     run_child(script)
