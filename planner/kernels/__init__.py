@@ -20,9 +20,9 @@ Every kernel does the same IEEE operations per element, in the same order,
 as the numpy code it replaces (no ``fastmath``, so no reassociation or
 fused multiply-add): the results are bit for bit the same, including which
 element wins a tie (first in the order numpy's ``argmin`` or stable
-``argsort`` would see). ``tests/planner/test_speedups.py`` and
-``test_kernels.py`` keep the numpy formulations as references and compare
-exactly.
+``argsort`` would see). ``tests/planner/test_speedups.py`` and the tests in
+``tests/planner/kernels/`` keep the numpy formulations as references and
+compare exactly.
 
 The speed profile's kernels (``profile_limits``, ``profile_passes``) replace
 its numpy steps and the Python loops of its friction-ellipse passes: 0.10 ms
