@@ -1,13 +1,14 @@
 """numba's ``njit`` with an on-disk cache where one can be written, shared by the kernel modules.
 
-``planner.kernels`` and ``localization.ekf.kernels`` compile with
-``cache=True``: later processes load the machine code instead of compiling it
-again (seconds). numba looks for a cache directory beside the kernel's source
-file, then under ``NUMBA_CACHE_DIR`` or the user's cache directory; with none
-writable, ``njit(cache=True)`` raises when it decorates. :func:`cached_njit`
-asks first, with a do-nothing function from the kernel module itself (the
-directory depends on its file), and falls back to compiling in every process,
-with one warning, instead of failing to import.
+The modules of ``planner.kernels``, ``planner.fused`` and
+``localization.ekf.kernels`` compile with ``cache=True``: later processes load
+the machine code instead of compiling it again (seconds). numba looks for a
+cache directory beside the kernel's source file, then under
+``NUMBA_CACHE_DIR`` or the user's cache directory; with none writable,
+``njit(cache=True)`` raises when it decorates. :func:`cached_njit` asks first,
+with a do-nothing function from the kernel module itself (the directory
+depends on its file), and falls back to compiling in every process, with one
+warning per module, instead of failing to import.
 """
 
 from __future__ import annotations

@@ -34,7 +34,8 @@ tree over the midpoints plus numpy glue, twice the time), and so is
 ``polyline_crosses``, which tests only the path segments that straddle a
 boundary edge's line and stops at the first crossing. The results are the
 numbers of the straightforward code (same operations per element;
-``tests/planner/test_kernels.py`` keeps the k-d tree version as the reference).
+``tests/planner/kernels/test_projection.py`` keeps the k-d tree version as the
+reference).
 """
 
 from __future__ import annotations

@@ -29,7 +29,7 @@ the steps' loops are compiled (``planner.kernels``: step 2 in one call, the
 bridges, the ordering, the spline's sampling, step 6's crossing test, which
 only examines the path segments that straddle a boundary edge's line, and
 the speed profile), with the numbers of the numpy code they replaced
-(``tests/planner/test_kernels.py``). Step 3's triangulation is scipy's.
+(``tests/planner/kernels/``). Step 3's triangulation is scipy's.
 ``reference_path_planning`` runs the compiled steps between two scipy calls
 in one call each (``planner.fused``: steps 2 and 3a in
 ``cones_with_partners``, steps 3 and 4 after the triangulation in

@@ -46,12 +46,13 @@ functions below it took 0.10 ms per 60 waypoints with the default limits
 step's 0.5 ms budget (issue 5). Compiled (``kernels.profile_limits`` and
 ``kernels.profile_passes``) it takes 7.6 us (4.1 us); the same operations in
 the same order, so the same numbers bit for bit, which
-``tests/planner/test_kernels.py`` checks against the step functions composed
-for every switch. The jerk limit's cube root stays ``numpy.cbrt`` between the
-two kernels: on CPUs with AVX-512 numpy takes it from SVML, whose last bit
-differs from libm's (and numba's) in about half the cases. The step
-functions stay as the reference, for the worked-number tests, and for the
-callers that need one step (``global_speed``, the autopilot).
+``tests/planner/kernels/test_speed_profile.py`` checks against the step
+functions composed for every switch. The jerk limit's cube root stays
+``numpy.cbrt`` between the two kernels: on CPUs with AVX-512 numpy takes it
+from SVML, whose last bit differs from libm's (and numba's) in about half the
+cases. The step functions stay as the reference, for the worked-number
+tests, and for the callers that need one step (``global_speed``, the
+autopilot).
 
 Inputs the step functions reject differ: they raise on an infinite window
 (``int(inf)``) or on a negative square root (a decreasing ``s``), where the
@@ -216,7 +217,7 @@ def speed_profile(
     Steps 1-4 above, compiled (``kernels.profile_limits`` and
     ``kernels.profile_passes``, with ``numpy.cbrt`` between them): the
     numbers of the step functions of this module composed (see
-    ``tests/planner/test_kernels.py``), bit for bit.
+    ``tests/planner/kernels/test_speed_profile.py``), bit for bit.
 
     Args:
         points: the waypoints, in driving order.

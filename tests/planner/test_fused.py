@@ -23,7 +23,7 @@ from planner.geometry import arc_length
 from planner.midline import boundary_cones, bridges_and_midpoints, cones_with_partners
 from planner.ordering import ordered_midpoints
 from planner.speed_profile import profile_speeds, speed_profile
-from tests.planner.test_kernels import random_cones, ref_track
+from tests.planner.kernels.helpers import random_cones, ref_track
 
 
 def turned(rng: np.random.Generator, cones: ConeSet) -> ConeSet:
