@@ -40,6 +40,15 @@ def shipped_tracks() -> list[str]:
     )
 
 
+@cache
+def shipped_data_dir() -> Path:
+    """The directory holding the shipped track files (extracted once for a zipped install)."""
+    data = files("tracks").joinpath(_DATA)
+    if isinstance(data, Path):
+        return data
+    return _extracted.enter_context(as_file(data))
+
+
 def shipped_track_path(name: str) -> Path:
     """The file of the shipped track ``name``.
 
@@ -51,11 +60,9 @@ def shipped_track_path(name: str) -> Path:
         raise TrackNotFoundError(
             f"unknown track {name!r}; shipped tracks: {', '.join(names) or '(none)'}"
         )
-    resource = files("tracks").joinpath(_DATA).joinpath(name + _SUFFIX)
-    if isinstance(resource, Path):
-        return resource
-    # Extract the whole data directory so the global path CSV sits next to the track.
-    return _extracted.enter_context(as_file(files("tracks").joinpath(_DATA))) / (name + _SUFFIX)
+    # A zipped install extracts the whole data directory, so that the global
+    # path CSV sits next to the track.
+    return shipped_data_dir() / (name + _SUFFIX)
 
 
 def load_track(name_or_path: str | os.PathLike[str]) -> Track:

@@ -2,6 +2,12 @@
 
 Floats are written with Python's shortest round-tripping repr, so reading the
 file back reproduces the track exactly (`Track.__eq__`).
+
+The global path is written as a path relative to the track file. A shipped
+track's global path lives in the installed package (``site-packages``, or a
+temporary extraction of a zipped install), where a link would break when the
+environment moves or the file is shared: written anywhere else, such a track
+gets a copy of its global path CSV next to it (``<stem>_path.csv``).
 """
 
 from __future__ import annotations
@@ -16,20 +22,25 @@ import yaml
 from tracks.kinds import CONE_KINDS
 from tracks.model import Track
 from tracks.readers_yaml import FORMAT_VERSION
+from tracks.shipped import shipped_data_dir
 
 
-def track_document(track: Track, directory: Path | None = None) -> dict[str, Any]:
+def track_document(
+    track: Track, directory: Path | None = None, global_path_file: Path | None = None
+) -> dict[str, Any]:
     """The track as our format's YAML document (a plain dict).
 
     Args:
         track: the track.
         directory: where the file will live; the global path is written
             relative to it (default: the global path's own directory).
+        global_path_file: the global path CSV to name instead of the track's.
     """
     global_path = None
-    if track.global_path_file is not None:
-        base = directory if directory is not None else track.global_path_file.parent
-        global_path = Path(os.path.relpath(track.global_path_file, base)).as_posix()
+    csv = global_path_file if global_path_file is not None else track.global_path_file
+    if csv is not None:
+        base = directory if directory is not None else csv.parent
+        global_path = Path(os.path.relpath(csv, base)).as_posix()
     pose = track.start_pose
     doc: dict[str, Any] = {
         "conesim_track": FORMAT_VERSION,
@@ -59,27 +70,71 @@ def write_track(track: Track, path: str | os.PathLike[str]) -> Path:
     """Write ``track`` to ``path`` in our own format.
 
     The file appears complete or not at all: it is written to a temporary
-    file in the same directory and moved into place with ``os.replace``.
+    file in the same directory and moved into place with ``os.replace``. A
+    shipped track's global path is first copied next to it (module
+    docstring); a copy made here is removed again if the track cannot be
+    written.
 
     Returns:
         The path written.
+
+    Raises:
+        FileExistsError: the global path's copy would replace a different file.
     """
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
+    csv, made = _global_path_beside(track, target)
     text = yaml.safe_dump(
-        track_document(track, target.parent.resolve()),
+        track_document(track, target.parent.resolve(), csv),
         sort_keys=False,
         default_flow_style=None,
         allow_unicode=True,
         width=100,
     )
+    try:
+        _write_atomically(target, text)
+    except BaseException:
+        if made and csv is not None:
+            csv.unlink(missing_ok=True)
+        raise
+    return target
+
+
+def _global_path_beside(track: Track, target: Path) -> tuple[Path | None, bool]:
+    """The global path CSV the written track names, and whether it was copied just now.
+
+    A shipped global path outside ``target``'s directory is copied there as
+    ``<stem>_path.csv`` (kept if an identical file is already there); any
+    other global path is named where it is.
+    """
+    source = track.global_path_file
+    if source is None:
+        return None, False
+    directory = target.parent.resolve()
+    resolved = source.resolve()
+    if not resolved.is_relative_to(shipped_data_dir().resolve()) or resolved.parent == directory:
+        return source, False
+    copy = directory / f"{target.stem}_path.csv"
+    content = resolved.read_text(encoding="utf-8")
+    if copy.exists():
+        if copy.read_text(encoding="utf-8") == content:
+            return copy, False
+        raise FileExistsError(
+            f"{copy}: exists and is not {track.name!r}'s global path; "
+            "remove it or write the track elsewhere"
+        )
+    _write_atomically(copy, content)
+    return copy, True
+
+
+def _write_atomically(target: Path, text: str) -> None:
+    """Write ``text`` to a temporary file beside ``target``, then move it into place."""
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as handle:
             handle.write(text)
-        os.chmod(tmp, _file_mode())  # mkstemp creates 0600; a track file is for everyone
+        os.chmod(tmp, _file_mode())  # mkstemp creates 0600; track files are for everyone
         os.replace(tmp, target)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
-    return target

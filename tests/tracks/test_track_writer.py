@@ -22,8 +22,42 @@ def test_round_trip_of_shipped_tracks(tmp_path: Path, name: str) -> None:
     np.testing.assert_array_equal(back.cones, track.cones)
     assert back.kinds == track.kinds and back.start_pose == track.start_pose
     np.testing.assert_array_equal(back.centreline, track.centreline)
-    assert back.global_path_file is not None and track.global_path_file is not None
-    assert back.global_path_file.resolve() == track.global_path_file.resolve()
+    # The shipped global path is copied next to the written track, byte for byte.
+    assert back.global_path_file == tmp_path / "copy_path.csv"
+    assert track.global_path_file is not None
+    assert back.global_path_file.read_bytes() == track.global_path_file.read_bytes()
+    assert yaml.safe_load((tmp_path / "copy.yaml").read_text())["global_path"] == "copy_path.csv"
+
+
+def test_a_shipped_global_path_copy_never_replaces_another_file(tmp_path: Path) -> None:
+    """Writing again keeps the identical copy; a different file of that name is
+    refused before anything is written; a failed track write removes the copy
+    it made."""
+    track = load_track("skidpad")
+    write_track(track, tmp_path / "mine.yaml")
+    write_track(track, tmp_path / "mine.yaml")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.yaml", "mine_path.csv"]
+    (tmp_path / "other_path.csv").write_text("37.5,127.0,0.001\n")
+    with pytest.raises(FileExistsError, match="other_path.csv: exists and is not 'skidpad'"):
+        write_track(track, tmp_path / "other.yaml")
+    assert not (tmp_path / "other.yaml").exists()
+    assert (tmp_path / "other_path.csv").read_text() == "37.5,127.0,0.001\n"
+
+
+def test_a_failed_write_removes_the_global_path_copy_it_made(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    real_replace = os.replace
+
+    def replace(src: str, dst: str) -> None:
+        if str(dst).endswith(".yaml"):
+            raise OSError("disk full")
+        real_replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", replace)
+    with pytest.raises(OSError, match="disk full"):
+        write_track(load_track("acceleration"), tmp_path / "lane.yaml")
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_round_trip_is_exact_for_awkward_floats(tmp_path: Path, stadium) -> None:
