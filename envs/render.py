@@ -188,7 +188,8 @@ class Renderer:
                 'pygame is not installed; install the render extra: pip install "conesim[render]"'
             ) from exc
         if self._window is None:
-            pygame.init()
+            # Only the display: pygame.init() also opens the audio device,
+            # which prints ALSA errors on a machine without one.
             pygame.display.init()
             self._window = pygame.display.set_mode((frame.shape[1], frame.shape[0]))
             pygame.display.set_caption("conesim")
