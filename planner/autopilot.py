@@ -24,8 +24,9 @@ localization), the global path, and the messages it receives.
 
 Building an autopilot runs one planning step on a made-up track
 (``warm_up_planner``), once per process: the planner's compiled kernels load
-there (from numba's cache, 0.2 s; compiled from a cold cache, about 12 s)
-rather than on the first detection.
+there (from numba's cache, 0.2 s; compiled from a cold cache, about 12 s on
+the development machine, 30-45 s on a slower one) rather than on the first
+detection.
 
 Every intermediate is an attribute for drawing and recording: ``classified``
 (left/right cones in ``reference``), ``plan`` (bridge lines, midpoints, path,
@@ -82,9 +83,10 @@ def warm_up_planner() -> None:
     """One planning step on a made-up gentle bend, once per process.
 
     Each compiled kernel (``planner.kernels``) is loaded from numba's cache
-    (all of them: 0.2 s) or compiled (cold cache: about 12 s) on its first
-    call. Calling them here, when the autopilot is built, keeps that out of
-    the first detection's latency. The step has its own path, frame tree and
+    (all of them: 0.2 s) or compiled (cold cache: about 12 s on the
+    development machine, 30-45 s on a slower one) on its first call.
+    Calling them here, when the autopilot is built, keeps that out of the
+    first detection's latency. The step has its own path, frame tree and
     cones (a 3.5 m wide bend, cones every 2.5 m): no autopilot's state is
     touched, and the kernels keep no state.
     """

@@ -14,7 +14,8 @@ next to each module's file, in this package's ``__pycache__``, or from
 is not writable, e.g. a system install; with no writable cache directory at
 all they compile in each process, with a warning per module). Compiling all
 of them from a cold cache takes about 12 s on the 2-core development
-machine, loading them from the cache about 0.25 s.
+machine (30-45 s on a slower one of the same kind), loading them from the
+cache about 0.25 s.
 
 Every kernel does the same IEEE operations per element, in the same order,
 as the numpy code it replaces (no ``fastmath``, so no reassociation or
