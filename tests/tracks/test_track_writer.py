@@ -38,7 +38,7 @@ def test_a_shipped_global_path_copy_never_replaces_another_file(tmp_path: Path) 
     write_track(track, tmp_path / "mine.yaml")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.yaml", "mine_path.csv"]
     (tmp_path / "other_path.csv").write_text("37.5,127.0,0.001\n")
-    with pytest.raises(FileExistsError, match="other_path.csv: exists and is not 'skidpad'"):
+    with pytest.raises(FileExistsError, match=r"other_path\.csv: exists and is not 'skidpad'"):
         write_track(track, tmp_path / "other.yaml")
     assert not (tmp_path / "other.yaml").exists()
     assert (tmp_path / "other_path.csv").read_text() == "37.5,127.0,0.001\n"
