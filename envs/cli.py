@@ -27,11 +27,11 @@ import logging
 import math
 import os
 import sys
-import tempfile
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any, TextIO
 
+from envs.paths import missing_dirs, nearest_existing, os_reason, probe_writable
 from envs.run_plot import save_run_picture
 from envs.runner import RunResult, run_scenario
 from envs.stack import LOCALIZATION_MODES
@@ -150,9 +150,9 @@ def cmd_track_show(name: str, out: str) -> int:
     try:
         if target.is_dir():
             raise CliError(f"--out {out}: is a directory; give a .png file name")
-        base = _nearest_existing(target.parent)
+        base = nearest_existing(target.parent)
     except OSError as exc:
-        raise CliError(f"--out {out}: cannot write there ({_reason(exc)})") from None
+        raise CliError(f"--out {out}: cannot write there ({os_reason(exc)})") from None
     if not base.is_dir():
         raise CliError(f"--out {out}: {base} is not a directory")
     track = _load_track(name, "track")
@@ -160,7 +160,7 @@ def cmd_track_show(name: str, out: str) -> int:
     try:
         written = save_track_picture(track, path, target)
     except OSError as exc:
-        raise CliError(f"--out {out}: cannot write the picture ({_reason(exc)})") from None
+        raise CliError(f"--out {out}: cannot write the picture ({os_reason(exc)})") from None
     red = int(path.high_covariance.sum())
     print(
         f"wrote {written}: {track.name}, {len(track.cones)} cones, global path "
@@ -251,11 +251,6 @@ def cmd_run(args: argparse.Namespace) -> int:
 OUTPUT_FILES = ("run.png", "result.json")  # the order they are moved into place
 
 
-def _reason(exc: OSError) -> str:
-    """An OSError's reason without the (possibly temporary) file name."""
-    return exc.strerror or type(exc).__name__
-
-
 def _check_output_dir(out: Path) -> None:
     """Prove ``--out`` can be created and written, before any simulation, creating nothing.
 
@@ -264,25 +259,16 @@ def _check_output_dir(out: Path) -> None:
     removed), and neither output may exist as a directory.
     """
     try:
-        base = _nearest_existing(out)
+        base = nearest_existing(out)
         if not base.is_dir():
             where = "is not a directory" if base == out else f"{base} is not a directory"
             raise CliError(f"--out {out}: {where}")
         for name in OUTPUT_FILES:
             if (out / name).is_dir():
                 raise CliError(f"--out {out}: {out / name} is a directory, not a file")
-        fd, probe = tempfile.mkstemp(prefix=".conesim-write-test-", dir=base)
-        os.close(fd)
-        os.unlink(probe)
+        probe_writable(base)
     except OSError as exc:
-        raise CliError(f"--out {out}: cannot write there ({_reason(exc)})") from None
-
-
-def _nearest_existing(path: Path) -> Path:
-    """``path`` itself if it exists, else its nearest existing ancestor."""
-    while not path.exists() and path != path.parent:
-        path = path.parent
-    return path
+        raise CliError(f"--out {out}: cannot write there ({os_reason(exc)})") from None
 
 
 def _check_render_extra() -> None:
@@ -316,7 +302,7 @@ def _write_outputs(
     per output directory at a time: two runs writing the same ``out`` at
     once may still interleave their moves.
     """
-    created = _missing_dirs(out)
+    created = missing_dirs(out)
     tag = f"{os.getpid()}.tmp"
     tmp = {name: out / f".{name}.{tag}" for name in OUTPUT_FILES}
     old = {name: out / f".{name}.old.{tag}" for name in OUTPUT_FILES}
@@ -343,18 +329,8 @@ def _write_outputs(
         for directory in reversed(created):
             with contextlib.suppress(OSError):
                 directory.rmdir()
-        raise CliError(f"--out {out}: cannot write the results ({_reason(exc)})") from None
+        raise CliError(f"--out {out}: cannot write the results ({os_reason(exc)})") from None
     _remove_temporaries([*tmp.values(), *old.values()])
-
-
-def _missing_dirs(out: Path) -> list[Path]:
-    """The directories ``out.mkdir(parents=True)`` would create, outermost first."""
-    base = _nearest_existing(out)
-    missing = []
-    while out != base:
-        missing.append(out)
-        out = out.parent
-    return missing[::-1]
 
 
 def _remove_temporaries(paths: Iterable[Path]) -> None:
