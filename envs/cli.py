@@ -7,8 +7,9 @@ Subcommands:
   and the global path coloured by covariance status.
 * ``conesim track check NAME|PATH [--json]``: the Formula Student validator.
 * ``conesim run``: one headless closed-loop scenario (``envs.runner``): a
-  results table, ``DIR/result.json`` and ``DIR/run.png``. A track in which
-  ``track check`` finds errors is bad input for ``run`` (warnings are not).
+  results table, ``DIR/result.json`` and ``DIR/run.png``; with ``--bag BAG``
+  also a ROS 2 bag of the run (``envs.bag``). A track in which ``track
+  check`` finds errors is bad input for ``run`` (warnings are not).
 
 ``-v`` (log the nodes' warnings) goes before or after the subcommand.
 
@@ -26,12 +27,16 @@ import json
 import logging
 import math
 import os
+import shutil
 import sys
-import tempfile
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any, TextIO
 
+from gymnasium.error import DependencyNotInstalled
+
+from envs.bag import BagError
+from envs.paths import missing_dirs, nearest_existing, os_reason, probe_writable
 from envs.run_plot import save_run_picture
 from envs.runner import RunResult, run_scenario
 from envs.stack import LOCALIZATION_MODES
@@ -113,6 +118,12 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--out", default="runs/latest", help="output directory (default runs/latest)")
     run.add_argument("--render", action="store_true", help="show a window (render extra)")
     run.add_argument("--json", action="store_true", help="print result.json to stdout")
+    run.add_argument(
+        "--bag",
+        metavar="DIR",
+        help="also record the run as a ROS 2 bag (rosbag2, MCAP) in the new directory DIR "
+        "(ros extra)",
+    )
     return parser
 
 
@@ -150,9 +161,9 @@ def cmd_track_show(name: str, out: str) -> int:
     try:
         if target.is_dir():
             raise CliError(f"--out {out}: is a directory; give a .png file name")
-        base = _nearest_existing(target.parent)
+        base = nearest_existing(target.parent)
     except OSError as exc:
-        raise CliError(f"--out {out}: cannot write there ({_reason(exc)})") from None
+        raise CliError(f"--out {out}: cannot write there ({os_reason(exc)})") from None
     if not base.is_dir():
         raise CliError(f"--out {out}: {base} is not a directory")
     track = _load_track(name, "track")
@@ -160,7 +171,7 @@ def cmd_track_show(name: str, out: str) -> int:
     try:
         written = save_track_picture(track, path, target)
     except OSError as exc:
-        raise CliError(f"--out {out}: cannot write the picture ({_reason(exc)})") from None
+        raise CliError(f"--out {out}: cannot write the picture ({os_reason(exc)})") from None
     red = int(path.high_covariance.sum())
     print(
         f"wrote {written}: {track.name}, {len(track.cones)} cones, global path "
@@ -208,9 +219,12 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     Every input is checked before the run (track, including the validator
     that ``track check`` runs, laps, seed, output directory, the render
-    extra), so bad input costs no simulation and writes nothing; the output
-    directory is created only once the results exist, and the two outputs
-    are written to temporary files and moved into place together.
+    extra, the bag directory and the ros extra), so bad input costs no
+    simulation and writes nothing; the output directory is created only once
+    the results exist, and the two outputs are written to temporary files
+    and moved into place together. The bag is written beside its target and
+    moved into place at the end of the run; it is removed again if the two
+    outputs cannot be written.
     """
     if not 1 <= args.laps <= MAX_LAPS:
         raise CliError(f"--laps {args.laps}: must be in [1, {MAX_LAPS}]")
@@ -228,32 +242,34 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.render:
         _check_render_extra()
     bar = ProgressBar(sys.stderr) if sys.stderr.isatty() and not args.json else None
-    result = run_scenario(
-        args.track,
-        laps=args.laps,
-        seed=args.seed,
-        sensors=args.sensors,
-        localization=args.localization,
-        render=args.render,
-        progress=bar.update if bar else None,
-    )
+    with _bag_errors():
+        result = run_scenario(
+            args.track,
+            laps=args.laps,
+            seed=args.seed,
+            sensors=args.sensors,
+            localization=args.localization,
+            render=args.render,
+            progress=bar.update if bar else None,
+            bag=args.bag,
+        )
     if bar:
         bar.close()
     payload = json.dumps(result.to_json(), indent=2)
-    _write_outputs(out, payload, result, track, global_path)
+    try:
+        _write_outputs(out, payload, result, track, global_path)
+    except CliError:
+        if args.bag is not None:  # the bag without its results would be half a run
+            shutil.rmtree(args.bag, ignore_errors=True)
+        raise
     if args.json:
         print(payload)
     else:
-        print(format_result(result, out))
+        print(format_result(result, out, args.bag))
     return EXIT_OK if result.finished else EXIT_FAILED
 
 
 OUTPUT_FILES = ("run.png", "result.json")  # the order they are moved into place
-
-
-def _reason(exc: OSError) -> str:
-    """An OSError's reason without the (possibly temporary) file name."""
-    return exc.strerror or type(exc).__name__
 
 
 def _check_output_dir(out: Path) -> None:
@@ -264,25 +280,27 @@ def _check_output_dir(out: Path) -> None:
     removed), and neither output may exist as a directory.
     """
     try:
-        base = _nearest_existing(out)
+        base = nearest_existing(out)
         if not base.is_dir():
             where = "is not a directory" if base == out else f"{base} is not a directory"
             raise CliError(f"--out {out}: {where}")
         for name in OUTPUT_FILES:
             if (out / name).is_dir():
                 raise CliError(f"--out {out}: {out / name} is a directory, not a file")
-        fd, probe = tempfile.mkstemp(prefix=".conesim-write-test-", dir=base)
-        os.close(fd)
-        os.unlink(probe)
+        probe_writable(base)
     except OSError as exc:
-        raise CliError(f"--out {out}: cannot write there ({_reason(exc)})") from None
+        raise CliError(f"--out {out}: cannot write there ({os_reason(exc)})") from None
 
 
-def _nearest_existing(path: Path) -> Path:
-    """``path`` itself if it exists, else its nearest existing ancestor."""
-    while not path.exists() and path != path.parent:
-        path = path.parent
-    return path
+@contextlib.contextmanager
+def _bag_errors() -> Iterator[None]:
+    """``--bag``'s problems as one line each: the path, or the missing extra."""
+    try:
+        yield
+    except BagError as exc:
+        raise CliError(f"--bag {exc}") from None
+    except DependencyNotInstalled as exc:
+        raise CliError(f"--bag: {exc}") from None
 
 
 def _check_render_extra() -> None:
@@ -316,7 +334,7 @@ def _write_outputs(
     per output directory at a time: two runs writing the same ``out`` at
     once may still interleave their moves.
     """
-    created = _missing_dirs(out)
+    created = missing_dirs(out)
     tag = f"{os.getpid()}.tmp"
     tmp = {name: out / f".{name}.{tag}" for name in OUTPUT_FILES}
     old = {name: out / f".{name}.old.{tag}" for name in OUTPUT_FILES}
@@ -343,18 +361,8 @@ def _write_outputs(
         for directory in reversed(created):
             with contextlib.suppress(OSError):
                 directory.rmdir()
-        raise CliError(f"--out {out}: cannot write the results ({_reason(exc)})") from None
+        raise CliError(f"--out {out}: cannot write the results ({os_reason(exc)})") from None
     _remove_temporaries([*tmp.values(), *old.values()])
-
-
-def _missing_dirs(out: Path) -> list[Path]:
-    """The directories ``out.mkdir(parents=True)`` would create, outermost first."""
-    base = _nearest_existing(out)
-    missing = []
-    while out != base:
-        missing.append(out)
-        out = out.parent
-    return missing[::-1]
 
 
 def _remove_temporaries(paths: Iterable[Path]) -> None:
@@ -363,13 +371,14 @@ def _remove_temporaries(paths: Iterable[Path]) -> None:
             path.unlink(missing_ok=True)
 
 
-def format_result(result: RunResult, out: Path) -> str:
-    """The results table ``conesim run`` prints."""
+def format_result(result: RunResult, out: Path, bag: str | None = None) -> str:
+    """The results table ``conesim run`` prints (``bag``: the bag written, if any)."""
 
     def num(value: float | None, fmt: str) -> str:
         return "n/a" if value is None else format(value, fmt)
 
     laps = ", ".join(f"{t:.2f} s" for t in result.lap_times_s) or "none"
+    written = [str(out / "result.json"), str(out / "run.png"), *([] if bag is None else [bag])]
     ratio = result.lap_time_ratio
     best = "n/a" if ratio is None or not math.isfinite(ratio) else f"{ratio:.2f}x"
     rows = [
@@ -398,7 +407,7 @@ def format_result(result: RunResult, out: Path) -> str:
             f"{result.sim_time_s:.2f} s / {result.wall_time_s:.2f} s "
             f"({result.real_time_factor:.1f}x real time)",
         ),
-        ("written", f"{out / 'result.json'}, {out / 'run.png'}"),
+        ("written", ", ".join(written)),
     ]
     width = max(len(k) for k, _ in rows)
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)

@@ -10,9 +10,10 @@ broadcast, the planner's midline error, speeds) and returning a
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -20,6 +21,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from envs.autopilot_policy import AutopilotPolicy
+from envs.bag import BagRecorder
 from envs.cone_track_env import ConeTrackEnv
 from envs.limit_lap import limit_lap_time
 from localization.geodesy import GeodesyError
@@ -117,6 +119,7 @@ def run_scenario(
     render: bool = False,
     progress: Callable[[float, float], None] | None = None,
     env_options: dict[str, Any] | None = None,
+    bag: str | os.PathLike[str] | None = None,
 ) -> RunResult:
     """Run one episode with the autopilot.
 
@@ -129,12 +132,17 @@ def run_scenario(
         render: show a window (the ``render`` extra).
         progress: called as ``progress(sim_time, time_limit)`` every control step.
         env_options: further ``EnvConfig`` fields (not the ones named above).
+        bag: record the run into a new rosbag2 directory there (``envs.bag``;
+            the ``ros`` extra). The run is the same with and without it.
 
     Raises:
         TrackFormatError: the track cannot be read, or the world cannot be
             built on it (the message names the track and its start pose).
         ValueError: ``env_options`` repeats an argument of this function, or
             ``EnvConfig`` refuses a field.
+        BagError: ``bag`` exists and is not an empty directory, or cannot be
+            written (checked before the run; nothing is left half written).
+        gymnasium.error.DependencyNotInstalled: ``bag`` without the ``ros`` extra.
     """
     # env_options keys that run_scenario sets itself, and the keyword to use instead
     own = {
@@ -151,6 +159,13 @@ def run_scenario(
             f"run_scenario: env_options {repeated} repeat arguments of run_scenario; "
             f"pass {instead} instead"
         )
+    recorder = None
+    if bag is not None:
+        recorder = BagRecorder(
+            bag,
+            {"conesim.track": track, "conesim.seed": str(seed), "conesim.sensors": sensors,
+             "conesim.localization": localization},
+        )  # fmt: skip
     with _world_build_errors(track):
         env = ConeTrackEnv(
             render_mode="human" if render else None,
@@ -161,7 +176,8 @@ def run_scenario(
             **(env_options or {}),
         )
     try:
-        return _drive(env, seed, progress)
+        with recorder or nullcontext():
+            return _drive(env, seed, progress, recorder)
     finally:
         env.close()
 
@@ -183,7 +199,10 @@ def _world_build_errors(track: str) -> Iterator[None]:
 
 
 def _drive(
-    env: ConeTrackEnv, seed: int, progress: Callable[[float, float], None] | None
+    env: ConeTrackEnv,
+    seed: int,
+    progress: Callable[[float, float], None] | None,
+    recorder: BagRecorder | None = None,
 ) -> RunResult:
     cfg = env.config
     wall0 = time.perf_counter()
@@ -191,6 +210,8 @@ def _drive(
         _, info = env.reset(seed=seed)
     policy = AutopilotPolicy(env)
     action = policy.reset(info)
+    if recorder is not None:
+        recorder.start(env.stack, policy.autopilot)
     track = env.stack.track
     centre_tree = _dense_centreline_tree(track)
     trace = RunTrace()
@@ -201,6 +222,8 @@ def _drive(
         _, _, terminated, truncated, info = env.step(action)
         action = policy(info)
         _record(env, policy, trace)
+        if recorder is not None:
+            recorder.record(env.stack, policy.autopilot)
         plan = policy.autopilot.plan
         if plan is not None and plan is not last_plan and len(policy.autopilot.path_reference):
             dist, _ = centre_tree.query(policy.autopilot.path_reference)

@@ -14,6 +14,13 @@ for each physics substep (``physics_rate / control_rate`` of them):
    ``LocalizationSample``, the localization error as the rest of the car's
    software sees it.
 
+What went through localization in the last control period is kept in
+``VehicleStack.traffic``, each item with the simulation time it was passed
+on: every measurement delivered (at its delivery step), every ``/local_xy``
+point ``gps_to_local_cartesian`` made, every ``reference -> gps_antenna``
+transform broadcast. A recorder (``envs.bag``) reads it; nothing in the loop
+does.
+
 The stack never decides the actuator command: the env's action (or the
 autopilot policy acting through it) does.
 """
@@ -26,7 +33,7 @@ from dataclasses import dataclass
 from localization.broadcaster import BroadcasterConfig, BroadcastMode, VehicleTfBroadcaster
 from localization.ekf import PROFILES as EKF_PROFILES
 from localization.ekf import Estimate, FusionEkf, for_profile
-from localization.frames import LATEST, Buffer, TransformError
+from localization.frames import LATEST, Buffer, TransformError, TransformStamped
 from localization.global_path import GlobalPath, global_path_for_track
 from localization.gps_to_local import GpsToLocalCartesian
 from localization.messages import (
@@ -41,6 +48,10 @@ from sim.world import World, WorldConfig
 from tracks import Track
 
 LOCALIZATION_MODES = ("fused", "raw", "truth")
+
+Traffic = list[tuple[float, Message | TransformStamped]]
+"""``(time [s], item)`` in the order localization passed them on: measurements
+delivered, ``/local_xy`` points (``PointStamped``) and dynamic transforms."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -117,6 +128,7 @@ class VehicleStack:
             ekf=self.ekf if mode == BroadcastMode.FUSED else None,
         )
         self.localization_samples: list[LocalizationSample] = []
+        self.traffic: Traffic = []  # this period's; reset(): the t = 0 ones
         self._handle(first)
         self._broadcast()
         return first
@@ -129,6 +141,7 @@ class VehicleStack:
     def run_physics_steps(self, n: int) -> list[Message]:
         """Advance ``n`` physics steps with the held command; all deliveries, in order."""
         out: list[Message] = []
+        self.traffic = []
         for _ in range(n):
             delivered = self.world.step()
             self._handle(delivered)
@@ -138,17 +151,21 @@ class VehicleStack:
 
     def _broadcast(self) -> None:
         truth = self.world.antenna_pose
-        sent = self.broadcaster.step(self.world.time, truth)
+        t = self.world.time
+        sent = self.broadcaster.step(t, truth)
         if sent is not None:
-            self.localization_samples.append(
-                LocalizationSample(self.world.time, sent.to_pose2d(), truth)
-            )
+            self.localization_samples.append(LocalizationSample(t, sent.to_pose2d(), truth))
+            self.traffic.append((t, sent))
 
     def _handle(self, messages: list[Message]) -> None:
+        t = self.world.time
+        traffic = self.traffic
         for msg in messages:
+            traffic.append((t, msg))
             if isinstance(msg, NavSatFix):
                 point = self.gps_to_local(msg)
                 if point is not None:
+                    traffic.append((t, point))
                     self.broadcaster.on_local_xy(point)
             elif isinstance(msg, HeadingStamped):
                 self.broadcaster.on_global_yaw(msg)

@@ -90,7 +90,8 @@ class BroadcasterConfig:
 class VehicleTfBroadcaster:
     """Publishes the vehicle's frames into a buffer (see the module docstring).
 
-    The static ``gps_antenna -> os_sensor`` link is sent once, here.
+    The static ``gps_antenna -> os_sensor`` link is sent once, here, and kept
+    as ``static_transform``.
 
     Args:
         buffer: the frame tree to publish into.
@@ -114,10 +115,10 @@ class VehicleTfBroadcaster:
         self._xyz: tuple[float, float, float] | None = None
         self._yaw: float | None = None
         cfg = self.config
-        static = TransformStamped(
+        self.static_transform = TransformStamped(
             cfg.antenna_frame, cfg.sensor_frame, 0.0, translation=cfg.sensor_offset
         )
-        buffer.set_transform_static(static, cfg.authority)
+        buffer.set_transform_static(self.static_transform, cfg.authority)
 
     # -- the seed's subscriptions (raw mode) -------------------------------------------------
 

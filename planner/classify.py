@@ -52,6 +52,7 @@ from localization.messages import FRAME_REFERENCE, ConeDetections, Header
 from planner import kernels
 from planner.config import ClassifierConfig
 from planner.geometry import FloatArray, IntArray, PathProjector, StationAxis
+from planner.messages import ConeMarker
 
 LEFT = 1
 RIGHT = -1
@@ -103,6 +104,13 @@ class ClassifiedCones:
     def right(self) -> FloatArray:
         """(m, 2) right cones [m] (``/right_cone_marker``)."""
         return self.points[self.side == RIGHT]
+
+    def markers(self) -> tuple[ConeMarker, ConeMarker]:
+        """``/left_cone_marker`` and ``/right_cone_marker``."""
+        return (
+            ConeMarker(self.header, self.left, "left"),
+            ConeMarker(self.header, self.right, "right"),
+        )
 
     def __len__(self) -> int:
         return len(self.points)
