@@ -405,7 +405,7 @@ def format_result(result: RunResult, out: Path, bag: str | None = None) -> str:
         (
             "sim / wall time",
             f"{result.sim_time_s:.2f} s / {result.wall_time_s:.2f} s "
-            f"({result.real_time_factor:.1f}x real time)",
+            f"({result.real_time_factor:.1f}x real time; setup {result.setup_time_s:.2f} s)",
         ),
         ("written", ", ".join(written)),
     ]

@@ -154,7 +154,7 @@ def test_run_json_on_acceleration(tmp_path: Path, capsys: pytest.CaptureFixture[
         "track", "seed", "sensors", "localization", "finished", "end_reason",
         "laps_completed", "lap_times_s", "cones_hit", "cones_down_or_out",
         "off_track_events", "sim_time_s", "wall_time_s", "real_time_factor",
-        "localization_pos_rmse_m", "localization_yaw_rmse_deg", "midline_rmse_m",
+        "setup_time_s", "localization_pos_rmse_m", "localization_yaw_rmse_deg", "midline_rmse_m",
         "planner_fallbacks", "limit_lap_time_s",
     }  # fmt: skip
     assert required <= set(result)
@@ -470,7 +470,7 @@ def make_result(lap_times: list[float], limit: float = 14.94) -> RunResult:
         finished=bool(lap_times), end_reason="laps" if lap_times else "off_track",
         laps_completed=len(lap_times), lap_times_s=lap_times, best_lap_s=best,
         cones_hit=0, cones_down_or_out=0, off_track_events=0, sim_time_s=1.0,
-        wall_time_s=1.0, real_time_factor=1.0, localization_pos_rmse_m=None,
+        wall_time_s=1.0, real_time_factor=1.0, setup_time_s=0.5, localization_pos_rmse_m=None,
         localization_yaw_rmse_deg=None, midline_rmse_m=None, planner_fallbacks=0,
         limit_lap_time_s=limit, lap_time_ratio=None if best is None else best / limit,
     )  # fmt: skip
