@@ -16,7 +16,8 @@ Subcommands:
 Exit codes: 0 success (``run``: every lap completed), 1 a check found errors
 or a run did not finish (off track, stuck, time limit), 2 bad input (one line
 on stderr per problem, naming the file or option and what is wrong; never a
-traceback; nothing written).
+traceback; nothing written), 141 the reader of stdout went away (a pipe into
+``head``), quietly, as a shell reports a command ended by SIGPIPE.
 """
 
 from __future__ import annotations
@@ -31,15 +32,13 @@ import shutil
 import sys
 from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
 from gymnasium.error import DependencyNotInstalled
 
-from envs.bag import BagError
+from envs.config import LOCALIZATION_MODES
 from envs.paths import missing_dirs, nearest_existing, os_reason, probe_writable
 from envs.run_plot import save_run_picture
-from envs.runner import RunResult, run_scenario
-from envs.stack import LOCALIZATION_MODES
 from envs.track_plot import save_track_picture
 from localization.geodesy import GeodesyError
 from localization.global_path import (
@@ -58,9 +57,13 @@ from tracks import (
     shipped_tracks,
 )
 
+if TYPE_CHECKING:
+    from envs.runner import RunResult
+
 EXIT_OK = 0
 EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
+EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE: what a shell reports for a reader that went away
 
 INPUT_ERRORS = (TrackFormatError, GlobalPathError, GeodesyError, FileNotFoundError)
 
@@ -226,6 +229,10 @@ def cmd_run(args: argparse.Namespace) -> int:
     moved into place at the end of the run; it is removed again if the two
     outputs cannot be written.
     """
+    # The closed loop (and its compiled kernels) loads only here: `tracks`,
+    # `track check` and `--help` neither pay for it nor print its warnings.
+    from envs.runner import run_scenario  # noqa: PLC0415
+
     if not 1 <= args.laps <= MAX_LAPS:
         raise CliError(f"--laps {args.laps}: must be in [1, {MAX_LAPS}]")
     if not 0 <= args.seed < 2**63:
@@ -295,6 +302,8 @@ def _check_output_dir(out: Path) -> None:
 @contextlib.contextmanager
 def _bag_errors() -> Iterator[None]:
     """``--bag``'s problems as one line each: the path, or the missing extra."""
+    from envs.bag import BagError  # noqa: PLC0415 (with the loop: cmd_run)
+
     try:
         yield
     except BagError as exc:
@@ -456,6 +465,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         for line in str(exc).splitlines() or [""]:
             print(f"conesim: error: {line}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except BrokenPipeError:
+        # The reader went away (`conesim tracks | head -1`): stop quietly, as
+        # a command in a pipeline should. What is left for stdout, Python's
+        # own flush at exit included, goes to the null device, not a traceback.
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, sys.stdout.fileno())
+        os.close(null)
+        return EXIT_BROKEN_PIPE
     raise AssertionError(f"unhandled command {args.command!r}")  # argparse prevents this
 
 

@@ -14,9 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from envs.stack import LOCALIZATION_MODES
 from sim.sensors import PROFILES as SENSOR_PROFILES
 from tracks import DEFAULT_TRACK
+
+LOCALIZATION_MODES = ("fused", "raw", "truth")
+"""Where the frame tree's ``reference -> gps_antenna`` comes from (``envs.stack``)."""
 
 OBSERVATION_MODES = ("vector", "dict")
 

@@ -10,15 +10,18 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from envs.runner import RunResult
 from envs.track_plot import draw_track, save_figure
 from localization.global_path import GlobalPath
 from tracks import Track
+
+if TYPE_CHECKING:  # the closed loop (and its compiled kernels) loads only for a run
+    from envs.runner import RunResult
 
 
 def save_run_picture(result: RunResult, track: Track, path: GlobalPath, out: Path) -> Path:

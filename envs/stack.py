@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from envs.config import LOCALIZATION_MODES
 from localization.broadcaster import BroadcasterConfig, BroadcastMode, VehicleTfBroadcaster
 from localization.ekf import PROFILES as EKF_PROFILES
 from localization.ekf import Estimate, FusionEkf, for_profile
@@ -46,8 +47,6 @@ from localization.messages import (
 from localization.pose import Pose2D
 from sim.world import World, WorldConfig
 from tracks import Track
-
-LOCALIZATION_MODES = ("fused", "raw", "truth")
 
 Traffic = list[tuple[float, Message | TransformStamped]]
 """``(time [s], item)`` in the order localization passed them on: measurements

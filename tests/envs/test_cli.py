@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 import math
 import os
+import subprocess
+import sys
 from pathlib import Path
 from typing import cast
 
@@ -383,7 +385,7 @@ def test_run_result_json_as_directory_is_refused_before_simulating(
     def no_run(*args: object, **kwargs: object) -> None:
         raise AssertionError("simulated despite bad output directory")
 
-    monkeypatch.setattr(cli, "run_scenario", no_run)
+    monkeypatch.setattr(runner, "run_scenario", no_run)
     (tmp_path / "run" / "result.json").mkdir(parents=True)
     code, out, err = run_cli(["run", "--out", str(tmp_path / "run")], capsys)
     assert_bad_input(code, out, err, "result.json is a directory")
@@ -484,3 +486,46 @@ def test_results_table_text() -> None:
     table = format_result(make_result([17.03]), Path("out"))
     assert "1/1: 17.03 s\n" in table
     assert "(best lap 1.14x)" in table
+
+
+def test_a_reader_that_goes_away_ends_the_command_quietly(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`conesim tracks | head -1`: writing into the closed pipe raises
+    BrokenPipeError; the command ends with 141 (128 + SIGPIPE) and no traceback,
+    and stdout is pointed at the null device for Python's flush at exit."""
+
+    class ClosedPipe:
+        def __init__(self, fd: int) -> None:
+            self.fd = fd
+
+        def write(self, text: str) -> int:
+            raise BrokenPipeError(32, "Broken pipe")
+
+        def flush(self) -> None:
+            pass
+
+        def fileno(self) -> int:
+            return self.fd
+
+    with (tmp_path / "stdout").open("w") as stand_in:
+        monkeypatch.setattr("sys.stdout", ClosedPipe(stand_in.fileno()))
+        assert main(["tracks"]) == cli.EXIT_BROKEN_PIPE == 141
+    assert capsys.readouterr().err == ""
+
+
+def test_commands_other_than_run_load_no_compiled_kernels() -> None:
+    """`--help`, `tracks` and `track check` import neither numba nor the closed
+    loop: they start faster and print no cache warnings where numba has no
+    writable cache directory."""
+    code = (
+        "import sys, contextlib, io\n"
+        "from envs.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    assert main(['tracks']) == 0 and main(['track', 'check', 'skidpad']) == 0\n"
+        "loaded = sorted(m for m in sys.modules if m.split('.')[0] == 'numba'"
+        " or m in ('envs.runner', 'envs.stack', 'planner'))\n"
+        "assert not loaded, loaded\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
