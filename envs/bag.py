@@ -188,6 +188,30 @@ def check_bag_target(path: str | os.PathLike[str]) -> Path:
     return target
 
 
+def remove_bag(path: str | os.PathLike[str], existed: bool, created: list[Path]) -> None:
+    """Remove a finished bag again (its run's other outputs could not be written).
+
+    Args:
+        path: the bag directory.
+        existed: it was an empty directory before the run (the user's): only
+            its contents go, the directory stays.
+        created: the parent directories made for it (``paths.missing_dirs``
+            before the run), removed when empty, innermost first.
+    """
+    target = Path(os.path.abspath(path))
+    if existed:
+        for item in target.iterdir():
+            if item.is_dir() and not item.is_symlink():
+                shutil.rmtree(item, ignore_errors=True)
+            else:
+                item.unlink(missing_ok=True)
+        return
+    shutil.rmtree(target, ignore_errors=True)
+    for directory in reversed(created):
+        with contextlib.suppress(OSError):
+            directory.rmdir()
+
+
 class BagRecorder:
     """Records one run into a rosbag2 directory (see the module docs).
 
@@ -210,6 +234,7 @@ class BagRecorder:
     ) -> None:
         self.path = check_bag_target(path)
         self.display = os.fspath(path)
+        self.existed = self.path.is_dir()  # an empty directory the user made
         require_rosbags()
         self.custom_data = dict(custom_data or {})
         self._tmp: Path | None = None
@@ -236,7 +261,10 @@ class BagRecorder:
         self._rm = rm
         store = rm.typestore()
         try:
-            base = nearest_existing(self.path.parent)
+            # An existing (empty) target gets the bag's files moved into it:
+            # the unfinished bag lives inside it, so a symlink, a mount point
+            # or another file system there is no different from a new name.
+            base = self.path if self.existed else nearest_existing(self.path.parent)
             self._tmp = Path(tempfile.mkdtemp(prefix=f".{self.path.name}.", dir=base))
             writer = self._writer = Writer(
                 self._tmp / self.path.name, version=BAG_VERSION, storage_plugin=StoragePlugin.MCAP
@@ -270,27 +298,33 @@ class BagRecorder:
         """Close and move the bag into place, or discard it on an exception."""
         if exc_type is not None:
             self._discard()
-            if isinstance(exc, OSError):
-                raise self._cannot_write(exc) from None
             return
         self._finish()
 
     def _finish(self) -> None:
         assert self._writer is not None and self._tmp is not None
-        created = missing_dirs(self.path.parent)
+        created = [] if self.existed else missing_dirs(self.path.parent)
+        written = self._tmp / self.path.name
+        moved: list[Path] = []
         try:
             self._writer.close()
             self._writer = None
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            os.replace(self._tmp / self.path.name, self.path)
+            if self.existed:
+                for item in sorted(written.iterdir()):
+                    os.replace(item, self.path / item.name)
+                    moved.append(self.path / item.name)
+            else:
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                os.replace(written, self.path)
         except OSError as exc:
             self._discard()
+            for item in moved:
+                item.unlink(missing_ok=True)
             for directory in reversed(created):
                 with contextlib.suppress(OSError):
                     directory.rmdir()
             raise self._cannot_write(exc) from None
-        with contextlib.suppress(OSError):
-            self._tmp.rmdir()
+        shutil.rmtree(self._tmp, ignore_errors=True)
         self._tmp = None
 
     def _cannot_write(self, exc: OSError) -> BagError:
@@ -372,7 +406,10 @@ class BagRecorder:
         assert self._writer is not None
         connection = self._connections[topic]
         data = rm.typestore().serialize_cdr(message, connection.msgtype)
-        self._writer.write(connection, rm.nanoseconds(t), data)
+        try:
+            self._writer.write(connection, rm.nanoseconds(t), data)
+        except OSError as exc:  # the bag's own file: say so (other errors pass as they are)
+            raise self._cannot_write(exc) from None
 
 
 def _traffic_topics(rm: ModuleType) -> dict[type, Routes]:

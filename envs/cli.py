@@ -28,7 +28,6 @@ import json
 import logging
 import math
 import os
-import shutil
 import sys
 from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
@@ -249,6 +248,12 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.render:
         _check_render_extra()
     bar = ProgressBar(sys.stderr) if sys.stderr.isatty() and not args.json else None
+    # What is the user's already, for removing the bag again: an empty
+    # directory they made stays, parents made for the bag go.
+    bag_existed, bag_parents = False, []
+    if args.bag is not None:
+        bag_path = Path(os.path.abspath(args.bag))
+        bag_existed, bag_parents = bag_path.is_dir(), missing_dirs(bag_path.parent)
     with _bag_errors():
         result = run_scenario(
             args.track,
@@ -267,7 +272,9 @@ def cmd_run(args: argparse.Namespace) -> int:
         _write_outputs(out, payload, result, track, global_path)
     except CliError:
         if args.bag is not None:  # the bag without its results would be half a run
-            shutil.rmtree(args.bag, ignore_errors=True)
+            from envs.bag import remove_bag  # noqa: PLC0415 (with the loop: cmd_run)
+
+            remove_bag(args.bag, bag_existed, bag_parents)
         raise
     if args.json:
         print(payload)

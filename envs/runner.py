@@ -172,6 +172,7 @@ def run_scenario(
             {"conesim.track": track, "conesim.seed": str(seed), "conesim.sensors": sensors,
              "conesim.localization": localization},
         )  # fmt: skip
+    setup0 = time.perf_counter()  # building the env loads (or compiles) the EKF's kernels
     with _world_build_errors(track):
         env = ConeTrackEnv(
             render_mode="human" if render else None,
@@ -183,7 +184,7 @@ def run_scenario(
         )
     try:
         with recorder or nullcontext():
-            return _drive(env, seed, progress, recorder)
+            return _drive(env, seed, progress, recorder, setup0)
     finally:
         env.close()
 
@@ -208,10 +209,11 @@ def _drive(
     env: ConeTrackEnv,
     seed: int,
     progress: Callable[[float, float], None] | None,
-    recorder: BagRecorder | None = None,
+    recorder: BagRecorder | None,
+    setup0: float,
 ) -> RunResult:
+    """Drive one episode; ``setup0``: when building the env began (perf_counter)."""
     cfg = env.config
-    setup0 = time.perf_counter()
     with _world_build_errors(cfg.track):
         _, info = env.reset(seed=seed)
     policy = AutopilotPolicy(env)

@@ -451,3 +451,43 @@ def test_check_bag_target_creates_nothing(tmp_path: Path) -> None:
     assert target == tmp_path / "a" / "b" / "bag" and list(tmp_path.iterdir()) == []
     with pytest.raises(BagError, match="exists and is not empty"):
         bag_module.check_bag_target(tmp_path.parent)
+
+
+def test_a_symlink_to_an_empty_directory_gets_the_bag(tmp_path: Path) -> None:
+    """An existing empty target (here a symlink to one; a mount point is alike)
+    gets the bag's files moved into it: the unfinished bag is written inside it,
+    not beside it, so the move cannot fail after the run."""
+    (tmp_path / "real").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "real", target_is_directory=True)
+    run_scenario("acceleration", bag=tmp_path / "link", env_options={"time_limit": 0.5})
+    assert sorted(p.name for p in (tmp_path / "real").iterdir()) == ["link.mcap", "metadata.yaml"]
+    assert (tmp_path / "link").is_symlink()
+    messages, _ = read_bag(tmp_path / "real")
+    assert len(messages["/ground_truth/odom"]) == 26  # t = 0 and 25 control steps of 20 ms
+
+
+@pytest.mark.parametrize("existed", [True, False])
+def test_results_that_cannot_be_written_take_only_what_the_bag_made(
+    existed: bool,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """When result.json and run.png cannot be written the bag goes too (half a run),
+    but an empty directory the user made stays, and only the parents made for
+    the bag are removed."""
+    from envs import cli
+
+    def cannot_write(*args: object) -> None:
+        raise cli.CliError("--out: cannot write there (disk full)")
+
+    monkeypatch.setattr(cli, "_write_outputs", cannot_write)
+    bag = tmp_path / "mine" if existed else tmp_path / "new" / "deeper" / "bag"
+    if existed:
+        bag.mkdir()
+    args = ["run", "--track", "acceleration", "--sensors", "ideal", "--out", str(tmp_path / "o")]
+    assert main([*args, "--bag", str(bag)]) == 2
+    assert "disk full" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == (["mine"] if existed else [])
+    if existed:
+        assert list(bag.iterdir()) == []
