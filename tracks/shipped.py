@@ -40,13 +40,24 @@ def shipped_tracks() -> list[str]:
     )
 
 
-@cache
+_extraction: list[Path] = []  # where a zipped install's data was extracted, once
+
+
 def shipped_data_dir() -> Path:
     """The directory holding the shipped track files (extracted once for a zipped install)."""
     data = files("tracks").joinpath(_DATA)
     if isinstance(data, Path):
         return data
-    return _extracted.enter_context(as_file(data))
+    if not _extraction:
+        _extraction.append(_extracted.enter_context(as_file(data)))
+    return _extraction[0]
+
+
+def is_shipped_file(path: Path) -> bool:
+    """Whether ``path`` is one of the shipped data files (nothing is extracted to tell)."""
+    data = files("tracks").joinpath(_DATA)
+    base = data if isinstance(data, Path) else (_extraction[0] if _extraction else None)
+    return base is not None and path.resolve().is_relative_to(base.resolve())
 
 
 def shipped_track_path(name: str) -> Path:

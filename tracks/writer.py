@@ -22,7 +22,7 @@ import yaml
 from tracks.kinds import CONE_KINDS
 from tracks.model import Track
 from tracks.readers_yaml import FORMAT_VERSION
-from tracks.shipped import shipped_data_dir
+from tracks.shipped import is_shipped_file
 
 
 def track_document(
@@ -71,19 +71,21 @@ def write_track(track: Track, path: str | os.PathLike[str]) -> Path:
 
     The file appears complete or not at all: it is written to a temporary
     file in the same directory and moved into place with ``os.replace``. A
-    shipped track's global path is first copied next to it (module
-    docstring); a copy made here is removed again if the track cannot be
-    written.
+    shipped track's global path is first copied next to it, byte for byte
+    (module docstring); if the track then cannot be written, the copy is
+    removed again, or the file it replaced put back.
 
     Returns:
         The path written.
 
     Raises:
-        FileExistsError: the global path's copy would replace a different file.
+        FileExistsError: the copy would replace another file (one that is
+            not the global path of the track file being replaced); checked
+            before anything is created.
     """
     target = Path(path)
+    csv, shipped = _global_path_plan(track, target)
     target.parent.mkdir(parents=True, exist_ok=True)
-    csv, made = _global_path_beside(track, target)
     text = yaml.safe_dump(
         track_document(track, target.parent.resolve(), csv),
         sort_keys=False,
@@ -91,48 +93,63 @@ def write_track(track: Track, path: str | os.PathLike[str]) -> Path:
         allow_unicode=True,
         width=100,
     )
+    replaced = None
+    if shipped is not None and csv is not None:
+        replaced = csv.read_bytes() if csv.exists() else None
+        _write_atomically(csv, shipped.read_bytes())
     try:
-        _write_atomically(target, text)
+        _write_atomically(target, text.encode("utf-8"))
     except BaseException:
-        if made and csv is not None:
-            csv.unlink(missing_ok=True)
+        if shipped is not None and csv is not None:
+            if replaced is None:
+                csv.unlink(missing_ok=True)
+            else:
+                _write_atomically(csv, replaced)
         raise
     return target
 
 
-def _global_path_beside(track: Track, target: Path) -> tuple[Path | None, bool]:
-    """The global path CSV the written track names, and whether it was copied just now.
+def _global_path_plan(track: Track, target: Path) -> tuple[Path | None, Path | None]:
+    """The global path CSV the written track names, and the shipped file to copy there first.
 
     A shipped global path outside ``target``'s directory is copied there as
-    ``<stem>_path.csv`` (kept if an identical file is already there); any
-    other global path is named where it is.
+    ``<stem>_path.csv``: not when an identical file is already there, and
+    over a different one only when that is the global path the track file
+    being replaced names. Any other global path is named where it is.
     """
     source = track.global_path_file
-    if source is None:
-        return None, False
+    if source is None or not is_shipped_file(source):
+        return source, None
     directory = target.parent.resolve()
-    resolved = source.resolve()
-    if not resolved.is_relative_to(shipped_data_dir().resolve()) or resolved.parent == directory:
-        return source, False
+    if source.resolve().parent == directory:
+        return source, None
     copy = directory / f"{target.stem}_path.csv"
-    content = resolved.read_text(encoding="utf-8")
     if copy.exists():
-        if copy.read_text(encoding="utf-8") == content:
-            return copy, False
-        raise FileExistsError(
-            f"{copy}: exists and is not {track.name!r}'s global path; "
-            "remove it or write the track elsewhere"
-        )
-    _write_atomically(copy, content)
-    return copy, True
+        if copy.read_bytes() == source.read_bytes():
+            return copy, None
+        if not _names_global_path(target, copy.name):
+            raise FileExistsError(
+                f"{copy}: exists and is not the global path of {track.name!r}; "
+                "remove it or write the track elsewhere"
+            )
+    return copy, source
 
 
-def _write_atomically(target: Path, text: str) -> None:
-    """Write ``text`` to a temporary file beside ``target``, then move it into place."""
+def _names_global_path(track_file: Path, name: str) -> bool:
+    """Whether ``track_file`` is a conesim track whose global path is ``name`` beside it."""
+    try:
+        doc = yaml.safe_load(track_file.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return False
+    return isinstance(doc, dict) and "conesim_track" in doc and doc.get("global_path") == name
+
+
+def _write_atomically(target: Path, data: bytes) -> None:
+    """Write ``data`` to a temporary file beside ``target``, then move it into place."""
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(text)
+        with os.fdopen(fd, "wb") as handle:
+            handle.write(data)
         os.chmod(tmp, _file_mode())  # mkstemp creates 0600; track files are for everyone
         os.replace(tmp, target)
     except BaseException:

@@ -30,23 +30,31 @@ def test_round_trip_of_shipped_tracks(tmp_path: Path, name: str) -> None:
 
 
 def test_a_shipped_global_path_copy_never_replaces_another_file(tmp_path: Path) -> None:
-    """Writing again keeps the identical copy; a different file of that name is
-    refused before anything is written; a failed track write removes the copy
-    it made."""
-    track = load_track("skidpad")
-    write_track(track, tmp_path / "mine.yaml")
-    write_track(track, tmp_path / "mine.yaml")
+    """Writing again keeps the identical copy; replacing the track file with
+    another shipped track replaces its copy too; a different file of that
+    name that no replaced track names is refused before anything is created."""
+    skidpad, lane = load_track("skidpad"), load_track("acceleration")
+    write_track(skidpad, tmp_path / "mine.yaml")
+    write_track(skidpad, tmp_path / "mine.yaml")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.yaml", "mine_path.csv"]
+    write_track(lane, tmp_path / "mine.yaml")
+    assert lane.global_path_file is not None
+    assert (tmp_path / "mine_path.csv").read_bytes() == lane.global_path_file.read_bytes()
+    assert read_track(tmp_path / "mine.yaml") == lane
     (tmp_path / "other_path.csv").write_text("37.5,127.0,0.001\n")
-    with pytest.raises(FileExistsError, match=r"other_path\.csv: exists and is not 'skidpad'"):
-        write_track(track, tmp_path / "other.yaml")
-    assert not (tmp_path / "other.yaml").exists()
+    with pytest.raises(FileExistsError, match=r"other_path\.csv: exists and is not the global"):
+        write_track(skidpad, tmp_path / "deep" / ".." / "other.yaml")
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "mine.yaml", "mine_path.csv", "other_path.csv"
+    ]  # fmt: skip
     assert (tmp_path / "other_path.csv").read_text() == "37.5,127.0,0.001\n"
 
 
 def test_a_failed_write_removes_the_global_path_copy_it_made(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
+    """The copy is written first; when the track file then cannot be moved into
+    place, the copy goes again (or the copy it replaced comes back)."""
     real_replace = os.replace
 
     def replace(src: str, dst: str) -> None:
@@ -58,6 +66,14 @@ def test_a_failed_write_removes_the_global_path_copy_it_made(
     with pytest.raises(OSError, match="disk full"):
         write_track(load_track("acceleration"), tmp_path / "lane.yaml")
     assert list(tmp_path.iterdir()) == []
+    monkeypatch.setattr(os, "replace", real_replace)
+    write_track(load_track("skidpad"), tmp_path / "lane.yaml")
+    before = (tmp_path / "lane_path.csv").read_bytes()
+    monkeypatch.setattr(os, "replace", replace)
+    with pytest.raises(OSError, match="disk full"):
+        write_track(load_track("acceleration"), tmp_path / "lane.yaml")
+    assert (tmp_path / "lane_path.csv").read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["lane.yaml", "lane_path.csv"]
 
 
 def test_round_trip_is_exact_for_awkward_floats(tmp_path: Path, stadium) -> None:
