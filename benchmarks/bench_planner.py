@@ -9,8 +9,8 @@
    numba) are compiled on their first call, or loaded from numba's cache, and
    neither belongs in a per-detection latency (the autopilot does it when it
    is built: ``planner.autopilot.warm_up_planner``).
-1b. The floor scipy sets: the same runs again with the planner's two scipy
-   calls timed where they happen (``timing.timed_calls`` on
+1b. The floor scipy sets: section 1's scenes again, with the planner's two
+   scipy calls timed where they happen (``timing.timed_calls`` on
    ``planner.bridges.Delaunay`` and ``planner.spline.splprep``): qhull's
    triangulation of every cone in view with its virtual partners (the seed's
    and the issue's "Delaunay on all of them") and the spline fit through the
@@ -130,8 +130,9 @@ def scipy_floor(repeats: int) -> None:
 
     The planner's two scipy calls (``Delaunay`` on every cone in view and its
     virtual partners; ``splprep`` through the midpoints), which the issue and
-    the seed name, are timed inside the same runs as section 1 (the same
-    scenes, data and cache state); "rest" is everything else per detection:
+    the seed name, are timed where the planner makes them, in runs of the
+    same scenes as section 1 with the timing wrappers added (the same data,
+    the cache state of a planning step); "rest" is everything else per detection:
     the frame tree, the projection, the compiled steps, the messages.
     """
     import planner.bridges

@@ -45,7 +45,9 @@ the planner's topics at the control step whose autopilot call planned them,
 the ground truth at each control step, the two "once" topics at 0. It is
 non-decreasing per topic. Header stamps are what the messages carry: a
 measurement's capture time, the planner's transform stamp (the cone
-markers: the detection's), the truth's own time. The simulation starts at
+markers: the time of the transform the classifier used, the detection's
+stamp, or the latest transform's when the autopilot fell back to it), the
+truth's own time. The simulation starts at
 0, so the bag starts at the epoch. A plan is recorded when the autopilot's
 plan changed since the last control step: with cone detections slower than
 the control rate (10 vs 50 Hz by default) that is every plan.

@@ -18,7 +18,8 @@ See ``envs.observation``: in ``vector`` mode a float32 Box of
 ``6 + 3 K`` values (estimated speed and yaw rate, the previous action, the
 EKF's 1-sigma position and heading uncertainty, then the K nearest detected
 cones in ``os_sensor`` as x, y, mask); ``dict`` mode adds colours, the
-estimated pose and its covariance.
+estimated pose and its covariance, ``pose_valid`` and ``cones_age`` (seconds
+since the cone detection's stamp).
 
 ## Rewards
 A sum of named terms, each also in ``info["reward_terms"]``: ``progress``
@@ -48,7 +49,9 @@ keys raise, listing the allowed ones. ``reset(options=...)`` takes ``track``,
 that episode only.
 
 ## Version History
-* v0: first release.
+* v0: first release (conesim 0.1.0, unreleased: its dict observation grew
+  ``pose_valid`` and ``cones_age`` before any release; a change after one
+  gets a new version).
 """
 
 from __future__ import annotations

@@ -114,7 +114,7 @@ def build_observation(
     *,
     published: Pose2D | None = None,
     awaiting_estimate: bool = False,
-    now: float = 0.0,
+    now: float,
 ) -> NDArray[np.float32] | dict[str, NDArray[np.float32]]:
     """The observation for the current step (see the module docstring).
 

@@ -15,14 +15,15 @@ Choices where conesim's message is not a ROS one:
   z = +9.80665 m/s^2, what an accelerometer reads on level ground.
 * Heading: ``/global_yaw`` is the seed's ``std_msgs/Float32`` [rad] (no
   stamp, no variance). The same measurement, stamped at capture with its
-  variance, is an orientation-only ``sensor_msgs/Imu`` (yaw about z in
-  ``reference``, variance at [2, 2]; no angular velocity or acceleration:
-  their covariance[0] = -1), as the u-blox driver's ``navheading`` carries a
-  dual-antenna heading.
+  variance, is an orientation-only ``sensor_msgs/Imu`` in ``gps_antenna``
+  (its yaw about z in the ENU ``reference``, variance at [2, 2], roll and
+  pitch unmeasured: ``UNMEASURED_VARIANCE``; no angular velocity or
+  acceleration: their covariance[0] = -1), as the u-blox driver's
+  ``navheading`` carries a dual-antenna heading in its GPS frame.
 * Wheel speed: ``geometry_msgs/TwistWithCovarianceStamped`` in the sensor's
   frame: linear.x the speed [m/s], covariance[0] its variance; the other
-  components are not measured (zero, covariance zero). robot_localization
-  takes a twist this way.
+  components are not measured (zero, variance ``UNMEASURED_VARIANCE``).
+  robot_localization takes a twist this way.
 * Cone detections: the seed's custom ``ModifiedFloat32MultiArray``
   (``CONE_ARRAY_DEFINITION``, registered as ``CONE_ARRAY_TYPE``): the
   header, a layout of two dimensions (``cones`` of size n, ``xyz`` of size
@@ -53,6 +54,7 @@ from localization.frames import TransformStamped
 from localization.frames.rigid import quat_from_yaw
 from localization.global_path import GlobalPath
 from localization.messages import (
+    FRAME_GPS_ANTENNA,
     ConeDetections,
     Header,
     HeadingStamped,
@@ -172,6 +174,11 @@ def _yaw_quaternion(yaw: float) -> Quaternion:
     return Quaternion(x=x, y=y, z=z, w=w)
 
 
+UNMEASURED_VARIANCE = 1e6
+"""The variance of a component a message carries but nothing measured (ROS has no
+"unknown" per component; a huge variance tells a filter to give it no weight)."""
+
+
 def _diagonal3(a: float, b: float, c: float) -> NDArray[np.float64]:
     """A row-major 3 x 3 covariance with ``a``, ``b``, ``c`` on its diagonal."""
     return np.array((a, 0.0, 0.0, 0.0, b, 0.0, 0.0, 0.0, c))
@@ -269,10 +276,15 @@ def global_yaw(heading: HeadingStamped) -> Float32:
 
 def heading_orientation(heading: HeadingStamped) -> RosImu:
     """The heading as an orientation-only ``sensor_msgs/Imu`` (see the module docs)."""
+    # The orientation of the antenna's body frame in the world, as the u-blox
+    # driver's navheading gives its GPS frame's; roll and pitch unmeasured.
+    header = Header(heading.header.stamp, FRAME_GPS_ANTENNA)
     return RosImu(
-        header=ros_header(heading.header),
+        header=ros_header(header),
         orientation=_yaw_quaternion(heading.yaw),
-        orientation_covariance=_diagonal3(0.0, 0.0, heading.variance),
+        orientation_covariance=_diagonal3(
+            UNMEASURED_VARIANCE, UNMEASURED_VARIANCE, heading.variance
+        ),
         angular_velocity=Vector3(x=0.0, y=0.0, z=0.0),
         angular_velocity_covariance=_not_given(),
         linear_acceleration=Vector3(x=0.0, y=0.0, z=0.0),
@@ -294,9 +306,11 @@ def imu(msg: Imu) -> RosImu:
 
 
 def wheel_speed(msg: WheelSpeed) -> TwistWithCovarianceStamped:
-    """The wheel speed as a twist: linear.x [m/s] with its variance at [0, 0]."""
-    covariance = np.zeros(36)
-    covariance[0] = msg.variance
+    """The wheel speed as a twist: linear.x [m/s] with its variance at [0, 0].
+
+    The other five components are zero and unmeasured (``UNMEASURED_VARIANCE``).
+    """
+    covariance = np.diag([msg.variance] + [UNMEASURED_VARIANCE] * 5).ravel()
     return TwistWithCovarianceStamped(
         header=ros_header(msg.header),
         twist=TwistWithCovariance(

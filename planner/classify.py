@@ -66,7 +66,8 @@ class ClassifiedCones:
     Each array has one row per kept cone, in detection order.
 
     Attributes:
-        header: the detection's stamp, frame ``reference``.
+        header: the stamp of the transform used (the detection's, or the
+            latest one's when ``time`` was ``LATEST``), frame ``reference``.
         points: (n, 2) cone positions [m].
         side: (n,) ``LEFT`` (+1) or ``RIGHT`` (-1).
         offset: (n,) signed distance from the nearest global-path segment,

@@ -94,22 +94,22 @@ def test_suite_early_return_changes_nothing() -> None:
 def test_observation_cone_block_follows_the_detection() -> None:
     memory = SensorMemory()
     action = np.zeros(2, dtype=np.float32)
-    empty = build_observation(memory, None, action, 4, "vector")
+    empty = build_observation(memory, None, action, 4, "vector", now=1.0)
     det = ConeDetections(
         Header(0.1, "os_sensor"), np.array([[1.0, 2.0, 0.0], [3.0, -1.0, 0.0]]), ("blue", "yellow")
     )
     memory.update([det])
-    first = build_observation(memory, None, action, 4, "dict")
+    first = build_observation(memory, None, action, 4, "dict", now=1.0)
     assert isinstance(first, dict)
     assert first["cone_mask"].tolist() == [1.0, 1.0, 0.0, 0.0]
     first["cones"][:] = 99.0  # the caller's copy, not the cached block
-    again = build_observation(memory, None, action, 4, "dict")
+    again = build_observation(memory, None, action, 4, "dict", now=1.0)
     assert isinstance(again, dict)
     assert again["cones"][:2].tolist() == [[1.0, 2.0], [3.0, -1.0]]
-    vec = build_observation(memory, None, action, 4, "vector")
+    vec = build_observation(memory, None, action, 4, "vector", now=1.0)
     assert vec[6:12].tolist() == [1.0, 2.0, 1.0, 3.0, -1.0, 1.0]
     memory.update([ConeDetections(Header(0.2, "os_sensor"), np.zeros((0, 3)), ())])
-    assert build_observation(memory, None, action, 4, "vector").tolist() == empty.tolist()
+    assert build_observation(memory, None, action, 4, "vector", now=1.0).tolist() == empty.tolist()
 
 
 def test_gps_scalar_conversion_is_the_library_one() -> None:
