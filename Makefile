@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: run test lint typecheck bench clean
+.PHONY: run test lint typecheck bench clean clean-cache
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -37,5 +37,12 @@ typecheck: $(STAMP)
 bench: $(STAMP)
 	for f in benchmarks/bench_*.py; do echo "== $$f"; $(BIN)/python $$f || exit 1; done
 
-clean:
+# numba's cached kernels: a cached kernel is checked against its own file only,
+# so after editing a kernel that another file's kernels call
+# (planner/kernels/_common.py, or a step kernel that planner/fused.py chains),
+# clear them; the next run compiles afresh.
+clean-cache:
+	find sim localization planner envs tracks -name __pycache__ -type d -prune -exec rm -rf {} +
+
+clean: clean-cache
 	rm -rf $(VENV) build *.egg-info .pytest_cache .mypy_cache .ruff_cache

@@ -28,7 +28,9 @@ that tests can call alone.
 
 The arguments are plain arrays and scalars (``kernels``' conventions); the
 callers are in ``midline``. Compiled with numba's on-disk cache like
-``kernels`` (``localization.compiled.cached_njit``).
+``kernels`` (``localization.compiled.cached_njit``); numba checks each cached
+function against its own file only, so after editing a step kernel that a
+function here calls, run ``make clean-cache``.
 """
 
 from __future__ import annotations
