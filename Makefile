@@ -25,14 +25,14 @@ test: $(STAMP)
 	$(BIN)/python -m pytest -q
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
-	$(BIN)/mypy
+	$(BIN)/python scripts/typecheck.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 
 typecheck: $(STAMP)
-	$(BIN)/mypy
+	$(BIN)/python scripts/typecheck.py
 
 bench: $(STAMP)
 	for f in benchmarks/bench_*.py; do echo "== $$f"; $(BIN)/python $$f || exit 1; done
@@ -42,7 +42,7 @@ bench: $(STAMP)
 # (planner/kernels/_common.py, or a step kernel that planner/fused.py chains),
 # clear them; the next run compiles afresh.
 clean-cache:
-	find sim localization planner envs tracks -name __pycache__ -type d -prune -exec rm -rf {} +
+	find conesim sim localization planner envs tracks -name __pycache__ -type d -prune -exec rm -rf {} +
 
 clean: clean-cache
 	rm -rf $(VENV) build *.egg-info .pytest_cache .mypy_cache .ruff_cache

@@ -37,10 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.stats import chi2
 
-from localization.ekf import EkfConfig, FusionEkf, RejectReason, for_profile
-from localization.ekf.synthetic import Path, SensorNoise, fix_message, make_truth, messages
-from localization.gps_to_local import gps_to_local_cartesian
-from localization.messages import (
+from conesim.core.messages import (
     FRAME_GPS_ANTENNA,
     FRAME_REFERENCE,
     Header,
@@ -51,7 +48,10 @@ from localization.messages import (
     NavSatStatus,
     WheelSpeed,
 )
-from localization.pose import Pose2D, wrap_angle
+from conesim.core.pose import Pose2D, wrap_angle
+from conesim.localization.ekf import EkfConfig, FusionEkf, RejectReason, for_profile
+from conesim.localization.ekf.synthetic import Path, SensorNoise, fix_message, make_truth, messages
+from conesim.localization.gps_to_local import gps_to_local_cartesian
 
 FloatArray = NDArray[np.float64]
 Tick = tuple[float, Pose2D, list[Message]]  # (time [s], true antenna pose, messages delivered)
@@ -220,9 +220,9 @@ class CentrelineDriver:
 
 def world_ticks(profile: str, seed: int, faults: Faults) -> Iterator[Tick]:
     """One lap of autocross in ``sim.world.World``: every physics step's truth and messages."""
-    from sim.sensors import get_profile, override
-    from sim.world import World, WorldConfig
-    from tracks import load_track
+    from conesim.sim.sensors import get_profile, override
+    from conesim.sim.world import World, WorldConfig
+    from conesim.tracks import load_track
 
     changes: dict[str, object] = {"cones.enabled": False}
     if faults.dropout is not None:

@@ -36,8 +36,8 @@ import time
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 
-from envs.cone_track_env import ConeTrackEnv
-from envs.runner import run_scenario
+from conesim.envs.cone_track_env import ConeTrackEnv
+from conesim.envs.runner import run_scenario
 
 from timing import timed_calls
 

@@ -22,8 +22,8 @@ from collections.abc import Callable, Iterator
 
 import numpy as np
 
-from localization.frames import LATEST, Buffer, TransformStamped
-from localization.pose import Pose2D
+from conesim.core.pose import Pose2D
+from conesim.localization.frames import LATEST, Buffer, TransformStamped
 
 RATE = 20.0  # dynamic link rate [Hz], as the seed's broadcaster
 HISTORY = 10.0  # sim time already held when measuring [s]

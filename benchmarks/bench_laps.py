@@ -19,8 +19,8 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-from envs.runner import run_scenario
-from tracks import shipped_tracks
+from conesim.envs.runner import run_scenario
+from conesim.tracks import shipped_tracks
 
 
 def one_run(job: tuple[str, int, str]) -> tuple[str, int, bool, str, int, int, float | None]:

@@ -39,13 +39,18 @@ import time
 import numpy as np
 from numpy.typing import NDArray
 
-from localization.frames import Buffer, TransformStamped
-from localization.global_path import global_path_for_track, global_path_from_centreline
-from localization.messages import ConeDetections, Header
-from localization.pose import Pose2D
-from planner import MidlineConfig, PathProjector, classify_cones_by_side, reference_path_planning
-from planner.classify import ClassifiedCones
-from planner.midline import PlanStatus
+from conesim.core.messages import ConeDetections, Header
+from conesim.core.pose import Pose2D
+from conesim.localization.frames import Buffer, TransformStamped
+from conesim.planner import (
+    MidlineConfig,
+    PathProjector,
+    classify_cones_by_side,
+    reference_path_planning,
+)
+from conesim.planner.classify import ClassifiedCones
+from conesim.planner.midline import PlanStatus
+from conesim.tracks.global_path import global_path_for_track, global_path_from_centreline
 
 from timing import timed_calls
 
@@ -135,14 +140,14 @@ def scipy_floor(repeats: int) -> None:
     the cache state of a planning step); "rest" is everything else per detection:
     the frame tree, the projection, the compiled steps, the messages.
     """
-    import planner.bridges
-    import planner.spline
+    import conesim.planner.bridges
+    import conesim.planner.spline
 
     print("\n== scipy's own calls in the same runs (Delaunay, splprep) per detection [ms]")
     print(f"{'cones':>6} {'triangulated':>13} {'Delaunay mean':>13} {'splprep mean':>12} "
           f"{'scipy med':>10} {'rest med':>9} {'total med':>10}  "
           "target total med <= 0.5")  # fmt: skip
-    targets = [(planner.bridges, "Delaunay"), (planner.spline, "splprep")]
+    targets = [(conesim.planner.bridges, "Delaunay"), (conesim.planner.spline, "splprep")]
     for n in (20, 40, 80):
         latency(n, 20)  # warm-up
         with timed_calls(targets) as tally:
@@ -169,10 +174,10 @@ def distance_to_polyline(points: FloatArray, line: FloatArray, closed: bool) -> 
 
 def accuracy(track_name: str, profile_name: str, step: int) -> tuple[float, float, int, int]:
     """RMSE and max [m] of the planned paths over a lap, with views scored and not."""
-    from sim.sensors.cone_detector import ConeDetector
-    from sim.sensors.profiles import get_profile
-    from sim.sensors.truth import TruthSample
-    from tracks import load_track
+    from conesim.sim.sensors.cone_detector import ConeDetector
+    from conesim.sim.sensors.profiles import get_profile
+    from conesim.sim.sensors.truth import TruthSample
+    from conesim.tracks import load_track
 
     track = load_track(track_name)
     path = global_path_for_track(track)
@@ -231,7 +236,7 @@ def main() -> None:
     print(f"{'track':>13} {'detector':>9} {'RMSE':>7} {'max':>6} {'views':>6} {'no path':>8}"
           "  targets: RMSE <= 0.10 ideal, <= 0.25 rtk")  # fmt: skip
     try:
-        from tracks import shipped_tracks
+        from conesim.tracks import shipped_tracks
     except ImportError as exc:  # pragma: no cover - tracks is part of the package
         print(f"  skipped: {exc}")
         return

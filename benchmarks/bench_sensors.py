@@ -19,9 +19,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from localization.pose import Pose2D
-from sim.sensors import ConeDetector, ConeMap, SensorSuite, TruthSample, get_profile
-from sim.sensors.suite import Sensor
+from conesim.core.pose import Pose2D
+from conesim.sim.sensors import ConeDetector, ConeMap, SensorSuite, TruthSample, get_profile
+from conesim.sim.sensors.suite import Sensor
 
 PHYSICS_HZ = 200.0
 SPEED = 10.0  # [m/s]

@@ -11,9 +11,9 @@ import time
 
 import pymunk
 
-from localization.pose import Pose2D
-from sim.vehicle import Vehicle, step
-from sim.vehicle_params import VehicleParams
+from conesim.core.pose import Pose2D
+from conesim.sim.vehicle import Vehicle, step
+from conesim.sim.vehicle_params import VehicleParams
 
 DT = 1.0 / 200.0  # [s]
 STEPS = 20_000  # 100 s of simulated time

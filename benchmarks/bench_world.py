@@ -18,12 +18,12 @@ import time
 import numpy as np
 import pymunk
 
-from localization.pose import Pose2D
-from sim.cones import ConeField
-from sim.vehicle import Vehicle, step
-from sim.vehicle_params import VehicleParams
-from sim.world import IDLE_SPEED_THRESHOLD, SLEEP_TIME_THRESHOLD, World, WorldConfig
-from tracks import load_track
+from conesim.core.pose import Pose2D
+from conesim.sim.cones import ConeField
+from conesim.sim.vehicle import Vehicle, step
+from conesim.sim.vehicle_params import VehicleParams
+from conesim.sim.world import IDLE_SPEED_THRESHOLD, SLEEP_TIME_THRESHOLD, World, WorldConfig
+from conesim.tracks import load_track
 
 DT = 1.0 / 200.0  # [s]
 STEPS = 10_000  # 50 s simulated

@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from envs.cone_track_env import ConeTrackEnv
-from planner import Autopilot, AutopilotConfig
+from conesim.envs.cone_track_env import ConeTrackEnv
+from conesim.planner import Autopilot, AutopilotConfig
 
 
 class AutopilotPolicy:

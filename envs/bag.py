@@ -81,9 +81,7 @@ from pathlib import Path
 from types import ModuleType, TracebackType
 from typing import TYPE_CHECKING, Any, Final
 
-from envs.paths import missing_dirs, nearest_existing, os_reason, probe_writable
-from localization.frames import TransformStamped
-from localization.messages import (
+from conesim.core.messages import (
     ConeDetections,
     HeadingStamped,
     Imu,
@@ -91,13 +89,15 @@ from localization.messages import (
     PointStamped,
     WheelSpeed,
 )
+from conesim.envs.paths import missing_dirs, nearest_existing, os_reason, probe_writable
+from conesim.localization.frames import TransformStamped
 
 if TYPE_CHECKING:
     from rosbags.interfaces import Connection, Qos
     from rosbags.rosbag2 import Writer
 
-    from envs.stack import VehicleStack
-    from planner.autopilot import Autopilot
+    from conesim.envs.stack import VehicleStack
+    from conesim.planner.autopilot import Autopilot
 
 BAG_VERSION: Final = 8  # rosbag2 metadata version (see the module docs)
 
@@ -258,7 +258,7 @@ class BagRecorder:
             Writer,
         )
 
-        from envs import ros_messages as rm  # noqa: PLC0415
+        from conesim.envs import ros_messages as rm  # noqa: PLC0415
 
         self._rm = rm
         store = rm.typestore()

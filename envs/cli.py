@@ -31,23 +31,17 @@ import os
 import sys
 from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TextIO
+from typing import TYPE_CHECKING, TextIO
 
 from gymnasium.error import DependencyNotInstalled
 
-from envs.config import LOCALIZATION_MODES
-from envs.paths import missing_dirs, nearest_existing, os_reason, probe_writable
-from envs.run_plot import save_run_picture
-from envs.track_plot import save_track_picture
-from localization.geodesy import GeodesyError
-from localization.global_path import (
-    GlobalPath,
-    GlobalPathError,
-    global_path_findings,
-    global_path_for_track,
-)
-from sim.sensors import PROFILES as SENSOR_PROFILES
-from tracks import (
+from conesim.core.geodesy import GeodesyError
+from conesim.envs.config import LOCALIZATION_MODES
+from conesim.envs.paths import missing_dirs, nearest_existing, os_reason, probe_writable
+from conesim.envs.run_plot import save_run_picture
+from conesim.envs.track_plot import save_track_picture
+from conesim.sim.sensors import PROFILES as SENSOR_PROFILES
+from conesim.tracks import (
     DEFAULT_TRACK,
     Track,
     TrackFormatError,
@@ -55,9 +49,14 @@ from tracks import (
     load_track,
     shipped_tracks,
 )
+from conesim.tracks.global_path import (
+    GlobalPath,
+    GlobalPathError,
+    global_path_for_track,
+)
 
 if TYPE_CHECKING:
-    from envs.runner import RunResult
+    from conesim.envs.runner import RunResult
 
 EXIT_OK = 0
 EXIT_FAILED = 1
@@ -187,7 +186,7 @@ def cmd_track_check(name: str, as_json: bool) -> int:
     """Validate a track; exit 0 when it has no errors."""
     track = _load_track(name, "track")
     # A malformed global path CSV is bad input too (exit 2).
-    report = _track_report(track, global_path_for_track(track))
+    report = check_report(track)
     if as_json:
         print(json.dumps(report))
     else:
@@ -201,16 +200,6 @@ def cmd_track_check(name: str, as_json: bool) -> int:
         if not report["warnings"] and not report["errors"]:
             print("ok: no warnings, no errors")
     return EXIT_FAILED if report["errors"] else EXIT_OK
-
-
-def _track_report(track: Track, global_path: GlobalPath) -> dict[str, Any]:
-    """The validator's report (``check_report``) with the global path's
-    findings against the track added (``global_path_findings``)."""
-    report = check_report(track)
-    warnings, errors = global_path_findings(track, global_path)
-    report["warnings"] += warnings
-    report["errors"] += errors
-    return report
 
 
 MAX_LAPS = 100
@@ -230,7 +219,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     """
     # The closed loop (and its compiled kernels) loads only here: `tracks`,
     # `track check` and `--help` neither pay for it nor print its warnings.
-    from envs.runner import run_scenario  # noqa: PLC0415
+    from conesim.envs.runner import run_scenario  # noqa: PLC0415
 
     if not 1 <= args.laps <= MAX_LAPS:
         raise CliError(f"--laps {args.laps}: must be in [1, {MAX_LAPS}]")
@@ -240,7 +229,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise CliError("--out: empty directory name; give the output directory")
     track = _load_track(args.track, "--track")
     global_path = global_path_for_track(track)
-    errors = _track_report(track, global_path)["errors"]
+    errors = check_report(track)["errors"]
     if errors:
         raise CliError("\n".join(f"{args.track}: {error}" for error in errors))
     out = Path(args.out)
@@ -272,7 +261,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         _write_outputs(out, payload, result, track, global_path)
     except CliError:
         if args.bag is not None:  # the bag without its results would be half a run
-            from envs.bag import remove_bag  # noqa: PLC0415 (with the loop: cmd_run)
+            from conesim.envs.bag import remove_bag  # noqa: PLC0415 (with the loop: cmd_run)
 
             remove_bag(args.bag, bag_existed, bag_parents)
         raise
@@ -309,7 +298,7 @@ def _check_output_dir(out: Path) -> None:
 @contextlib.contextmanager
 def _bag_errors() -> Iterator[None]:
     """``--bag``'s problems as one line each: the path, or the missing extra."""
-    from envs.bag import BagError  # noqa: PLC0415 (with the loop: cmd_run)
+    from conesim.envs.bag import BagError  # noqa: PLC0415 (with the loop: cmd_run)
 
     try:
         yield

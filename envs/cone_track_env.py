@@ -64,16 +64,16 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
-from envs.config import EnvConfig
-from envs.observation import SensorMemory, build_observation, observation_space
-from envs.render import Renderer, Scene
-from envs.stack import VehicleStack
-from localization.frames import LATEST, TransformError
-from localization.geodesy import GeodesyError
-from localization.messages import Message
-from localization.pose import Pose2D
-from sim.world import WorldConfig
-from tracks import Track, load_track
+from conesim.core.geodesy import GeodesyError
+from conesim.core.messages import Message
+from conesim.core.pose import Pose2D
+from conesim.envs.config import EnvConfig
+from conesim.envs.observation import SensorMemory, build_observation, observation_space
+from conesim.envs.render import Renderer, Scene
+from conesim.envs.stack import VehicleStack
+from conesim.localization.frames import LATEST, TransformError
+from conesim.sim.world import WorldConfig
+from conesim.tracks import Track, load_track
 
 ObsType = NDArray[np.float32] | dict[str, NDArray[np.float32]]
 RESET_OPTIONS = ("track", "sensors", "localization", "start_pose")

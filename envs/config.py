@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from sim.sensors import PROFILES as SENSOR_PROFILES
-from tracks import DEFAULT_TRACK
+from conesim.sim.sensors import PROFILES as SENSOR_PROFILES
+from conesim.tracks import DEFAULT_TRACK
 
 LOCALIZATION_MODES = ("fused", "raw", "truth")
 """Where the frame tree's ``reference -> gps_antenna`` comes from (``envs.stack``)."""

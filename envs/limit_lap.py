@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import splev, splprep
 
-from sim.vehicle_params import VehicleParams
+from conesim.sim.vehicle_params import VehicleParams
 
 FloatArray = NDArray[np.float64]
 STEP_M = 0.25  # [m] resampling step of the centreline

@@ -42,9 +42,9 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from localization.ekf import Estimate
-from localization.messages import CONE_COLOURS, ConeDetections, Imu, Message, WheelSpeed
-from localization.pose import Pose2D
+from conesim.core.messages import CONE_COLOURS, ConeDetections, Imu, Message, WheelSpeed
+from conesim.core.pose import Pose2D
+from conesim.localization.ekf import Estimate
 
 EGO_SIZE = 6
 EGO_LOW = np.array([-5.0, -10.0, -1.0, -1.0, 0.0, 0.0], dtype=np.float32)

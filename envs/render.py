@@ -24,10 +24,10 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse, Polygon
 from numpy.typing import NDArray
 
-from envs.track_plot import CONE_STYLE, draw_global_path
-from localization.global_path import GlobalPath
-from localization.pose import Pose2D
-from tracks import ConeKind
+from conesim.core.pose import Pose2D
+from conesim.envs.track_plot import CONE_STYLE, draw_global_path
+from conesim.tracks import ConeKind
+from conesim.tracks.global_path import GlobalPath
 
 FloatArray = NDArray[np.float64]
 

@@ -49,11 +49,7 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 from rosbags.typesys.stores import ros2_humble as ros
 
-from envs.bag import CONE_ARRAY_TYPE
-from localization.frames import TransformStamped
-from localization.frames.rigid import quat_from_yaw
-from localization.global_path import GlobalPath
-from localization.messages import (
+from conesim.core.messages import (
     FRAME_GPS_ANTENNA,
     ConeDetections,
     Header,
@@ -63,8 +59,12 @@ from localization.messages import (
     PointStamped,
     WheelSpeed,
 )
-from localization.pose import Pose2D
-from planner.messages import BridgeLines, ConeMarker, LocalPath, Midpoints, Waypoints
+from conesim.core.pose import Pose2D
+from conesim.envs.bag import CONE_ARRAY_TYPE
+from conesim.localization.frames import TransformStamped
+from conesim.localization.frames.rigid import quat_from_yaw
+from conesim.planner.messages import BridgeLines, ConeMarker, LocalPath, Midpoints, Waypoints
+from conesim.tracks.global_path import GlobalPath
 
 # The Humble message classes (typed dataclasses).
 Duration = ros.builtin_interfaces__msg__Duration

@@ -16,12 +16,12 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from envs.track_plot import draw_track, save_figure
-from localization.global_path import GlobalPath
-from tracks import Track
+from conesim.envs.track_plot import draw_track, save_figure
+from conesim.tracks import Track
+from conesim.tracks.global_path import GlobalPath
 
 if TYPE_CHECKING:  # the closed loop (and its compiled kernels) loads only for a run
-    from envs.runner import RunResult
+    from conesim.envs.runner import RunResult
 
 
 def save_run_picture(result: RunResult, track: Track, path: GlobalPath, out: Path) -> Path:

@@ -20,14 +20,14 @@ from typing import Any
 import numpy as np
 from scipy.spatial import cKDTree
 
-from envs.autopilot_policy import AutopilotPolicy
-from envs.bag import BagRecorder
-from envs.cone_track_env import ConeTrackEnv
-from envs.limit_lap import limit_lap_time
-from localization.geodesy import GeodesyError
-from sim.progress import PolylineProgress
-from sim.race_control import line_crossings_along
-from tracks import Track, TrackFormatError, load_track
+from conesim.core.geodesy import GeodesyError
+from conesim.envs.autopilot_policy import AutopilotPolicy
+from conesim.envs.bag import BagRecorder
+from conesim.envs.cone_track_env import ConeTrackEnv
+from conesim.envs.limit_lap import limit_lap_time
+from conesim.sim.progress import PolylineProgress
+from conesim.sim.race_control import line_crossings_along
+from conesim.tracks import Track, TrackFormatError, load_track
 
 MIDLINE_SAMPLE_M = 0.05  # [m] spacing of the densified true centreline
 

@@ -30,23 +30,23 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from envs.config import LOCALIZATION_MODES
-from localization.broadcaster import BroadcasterConfig, BroadcastMode, VehicleTfBroadcaster
-from localization.ekf import PROFILES as EKF_PROFILES
-from localization.ekf import Estimate, FusionEkf, for_profile
-from localization.frames import LATEST, Buffer, TransformError, TransformStamped
-from localization.global_path import GlobalPath, global_path_for_track
-from localization.gps_to_local import GpsToLocalCartesian
-from localization.messages import (
+from conesim.core.messages import (
     FRAME_GPS_ANTENNA,
     FRAME_REFERENCE,
     HeadingStamped,
     Message,
     NavSatFix,
 )
-from localization.pose import Pose2D
-from sim.world import World, WorldConfig
-from tracks import Track
+from conesim.core.pose import Pose2D
+from conesim.envs.config import LOCALIZATION_MODES
+from conesim.localization.broadcaster import BroadcasterConfig, BroadcastMode, VehicleTfBroadcaster
+from conesim.localization.ekf import PROFILES as EKF_PROFILES
+from conesim.localization.ekf import Estimate, FusionEkf, for_profile
+from conesim.localization.frames import LATEST, Buffer, TransformError, TransformStamped
+from conesim.localization.gps_to_local import GpsToLocalCartesian
+from conesim.sim.world import World, WorldConfig
+from conesim.tracks import Track
+from conesim.tracks.global_path import GlobalPath, global_path_for_track
 
 Traffic = list[tuple[float, Message | TransformStamped]]
 """``(time [s], item)`` in the order localization passed them on: measurements

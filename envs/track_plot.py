@@ -17,8 +17,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 
-from localization.global_path import GlobalPath
-from tracks import ConeKind, Track
+from conesim.tracks import ConeKind, Track
+from conesim.tracks.global_path import GlobalPath
 
 CONE_STYLE: dict[ConeKind, tuple[str, float]] = {
     ConeKind.BLUE: ("#1f4fd1", 14.0),

@@ -1,15 +1,6 @@
-"""Localization: geodesy, the frame tree (tf2 semantics), GPS/IMU fusion, TF broadcaster.
+"""Localization: the frame tree (tf2 semantics), GPS/IMU fusion, the TF broadcaster.
 
-This package's ``__init__`` stays import-light on purpose: ``localization.pose``,
-``localization.geodesy`` (and, later, ``localization.messages``) are dependency-free
-leaf modules that the track loader and the simulator's sensor models share, the
-way every ROS node shares ``geometry_msgs`` and ``sensor_msgs``.
+Measurements in, the ``reference -> gps_antenna -> os_sensor`` frame tree
+out (seed 000). Imports ``conesim.core`` and ``conesim.tracks`` only: never
+the simulator, whose truth the car's software cannot see.
 """
-
-import logging
-
-# A library logs, the application decides what is shown (the logging HOWTO's
-# advice for libraries): without this, Python's last-resort handler printed
-# the EKF's warnings to stderr in every script that used the env. The
-# ``conesim`` command configures logging (``-v`` shows the warnings).
-logging.getLogger(__name__).addHandler(logging.NullHandler())

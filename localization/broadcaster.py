@@ -32,16 +32,16 @@ import math
 from dataclasses import dataclass
 from enum import StrEnum
 
-from localization.ekf import FusionEkf
-from localization.frames import Buffer, TransformStamped
-from localization.messages import (
+from conesim.core.messages import (
     FRAME_GPS_ANTENNA,
     FRAME_OS_SENSOR,
     FRAME_REFERENCE,
     HeadingStamped,
     PointStamped,
 )
-from localization.pose import Pose2D
+from conesim.core.pose import Pose2D
+from conesim.localization.ekf import FusionEkf
+from conesim.localization.frames import Buffer, TransformStamped
 
 TIME_EPS = 1e-9  # [s] tolerance of the broadcast clock
 

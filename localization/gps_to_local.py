@@ -26,15 +26,15 @@ import logging
 import math
 from collections import Counter
 
-from localization.geodesy import (
+from conesim.core.geodesy import (
     DEFAULT_ORIGIN,
     R_EARTH,
     GeodesyError,
     ReferenceOrigin,
     wrapped_lon_difference,
 )
-from localization.geodesy import gps_to_local_cartesian as project
-from localization.messages import FRAME_REFERENCE, Header, NavSatFix, NavSatStatus, PointStamped
+from conesim.core.geodesy import gps_to_local_cartesian as project
+from conesim.core.messages import FRAME_REFERENCE, Header, NavSatFix, NavSatStatus, PointStamped
 
 _log = logging.getLogger(__name__)
 

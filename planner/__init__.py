@@ -20,11 +20,9 @@ tree and the global path. It never imports ``sim``.
 
 from __future__ import annotations
 
-import logging
-
-from planner.autopilot import Autopilot
-from planner.classify import LEFT, RIGHT, ClassifiedCones, classify_cones_by_side
-from planner.config import (
+from conesim.planner.autopilot import Autopilot
+from conesim.planner.classify import LEFT, RIGHT, ClassifiedCones, classify_cones_by_side
+from conesim.planner.config import (
     AutopilotConfig,
     ClassifierConfig,
     MidlineConfig,
@@ -32,8 +30,8 @@ from planner.config import (
     SpeedControlConfig,
     SpeedProfileConfig,
 )
-from planner.geometry import PathProjector, Projection
-from planner.messages import (
+from conesim.planner.geometry import PathProjector, Projection
+from conesim.planner.messages import (
     BridgeLines,
     ConeMarker,
     ControlCommand,
@@ -41,13 +39,15 @@ from planner.messages import (
     Midpoints,
     Waypoints,
 )
-from planner.midline import LocalPlan, PlanStatus, carry_path_forward, reference_path_planning
-from planner.pure_pursuit import SteeringResult, lookahead_distance, pure_pursuit
-from planner.speed_control import SpeedController, target_on_path
-from planner.speed_profile import speed_profile
-
-# A library logs, the application decides what is shown (as in localization).
-logging.getLogger(__name__).addHandler(logging.NullHandler())
+from conesim.planner.midline import (
+    LocalPlan,
+    PlanStatus,
+    carry_path_forward,
+    reference_path_planning,
+)
+from conesim.planner.pure_pursuit import SteeringResult, lookahead_distance, pure_pursuit
+from conesim.planner.speed_control import SpeedController, target_on_path
+from conesim.planner.speed_profile import speed_profile
 
 __all__ = [
     "LEFT",

@@ -46,15 +46,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from localization.frames import (
-    LATEST,
-    Buffer,
-    ExtrapolationError,
-    TransformError,
-    TransformStamped,
-)
-from localization.global_path import GlobalPath, global_path_from_centreline
-from localization.messages import (
+from conesim.core.messages import (
     FRAME_OS_SENSOR,
     FRAME_REFERENCE,
     ConeDetections,
@@ -62,16 +54,24 @@ from localization.messages import (
     Message,
     WheelSpeed,
 )
-from localization.pose import Pose2D
-from planner.classify import ClassifiedCones, classify_cones_by_side
-from planner.config import AutopilotConfig
-from planner.geometry import FloatArray, PathProjector, arc_length
-from planner.global_speed import GlobalSpeedPlan
-from planner.messages import ControlCommand
-from planner.midline import LocalPlan, PlanStatus, reference_path_planning
-from planner.pure_pursuit import SteeringResult, lookahead_distance, pure_pursuit
-from planner.speed_control import SpeedController, target_on_path
-from planner.speed_profile import forward_pass, speed_profile
+from conesim.core.pose import Pose2D
+from conesim.localization.frames import (
+    LATEST,
+    Buffer,
+    ExtrapolationError,
+    TransformError,
+    TransformStamped,
+)
+from conesim.planner.classify import ClassifiedCones, classify_cones_by_side
+from conesim.planner.config import AutopilotConfig
+from conesim.planner.geometry import FloatArray, PathProjector, arc_length
+from conesim.planner.global_speed import GlobalSpeedPlan
+from conesim.planner.messages import ControlCommand
+from conesim.planner.midline import LocalPlan, PlanStatus, reference_path_planning
+from conesim.planner.pure_pursuit import SteeringResult, lookahead_distance, pure_pursuit
+from conesim.planner.speed_control import SpeedController, target_on_path
+from conesim.planner.speed_profile import forward_pass, speed_profile
+from conesim.tracks.global_path import GlobalPath, global_path_from_centreline
 
 _log = logging.getLogger(__name__)
 

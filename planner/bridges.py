@@ -61,9 +61,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import Delaunay, QhullError
 
-from planner import kernels
-from planner.config import MidlineConfig
-from planner.geometry import FloatArray, IntArray, StationAxis
+from conesim.planner import kernels
+from conesim.planner.config import MidlineConfig
+from conesim.planner.geometry import FloatArray, IntArray, StationAxis
 
 BoolArray = NDArray[np.bool_]
 

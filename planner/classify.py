@@ -46,13 +46,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from localization.frames import Buffer
-from localization.global_path import GlobalPath
-from localization.messages import FRAME_REFERENCE, ConeDetections, Header
-from planner import kernels
-from planner.config import ClassifierConfig
-from planner.geometry import FloatArray, IntArray, PathProjector, StationAxis
-from planner.messages import ConeMarker
+from conesim.core.messages import FRAME_REFERENCE, ConeDetections, Header
+from conesim.localization.frames import Buffer
+from conesim.planner import kernels
+from conesim.planner.config import ClassifierConfig
+from conesim.planner.geometry import FloatArray, IntArray, PathProjector, StationAxis
+from conesim.planner.messages import ConeMarker
+from conesim.tracks.global_path import GlobalPath
 
 LEFT = 1
 RIGHT = -1

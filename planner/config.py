@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any, Self
 
-from localization.messages import CONE_COLOURS, FRAME_OS_SENSOR, FRAME_REFERENCE
+from conesim.core.messages import CONE_COLOURS, FRAME_OS_SENSOR, FRAME_REFERENCE
 
 
 def _check(owner: str, name: str, value: float, lo: float, hi: float = math.inf) -> None:

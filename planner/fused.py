@@ -37,15 +37,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from localization.compiled import cached_njit
-from planner import kernels
+from conesim.core.compiled import cached_njit
+from conesim.planner import kernels
 
 
 def _probe() -> None:
     """Nothing: what ``cached_njit`` asks numba to cache, from this file's directory."""
 
 
-_compiled = cached_njit(_probe, "planner.fused")
+_compiled = cached_njit(_probe, "conesim.planner.fused")
 
 
 @_compiled

@@ -46,8 +46,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from localization.global_path import GlobalPath
-from planner import fused, kernels
+from conesim.planner import fused, kernels
+from conesim.tracks.global_path import GlobalPath
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]

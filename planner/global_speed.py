@@ -21,10 +21,10 @@ import dataclasses
 
 import numpy as np
 
-from localization.global_path import GlobalPath
-from planner.config import SpeedProfileConfig
-from planner.geometry import FloatArray, arc_length
-from planner.speed_profile import menger_curvature, speed_profile, window_mean
+from conesim.planner.config import SpeedProfileConfig
+from conesim.planner.geometry import FloatArray, arc_length
+from conesim.planner.speed_profile import menger_curvature, speed_profile, window_mean
+from conesim.tracks.global_path import GlobalPath
 
 
 class GlobalSpeedPlan:

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from localization.messages import Header
-from planner.geometry import FloatArray
+from conesim.core.messages import Header
+from conesim.planner.geometry import FloatArray
 
 
 @dataclass(frozen=True, slots=True)

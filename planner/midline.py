@@ -49,10 +49,10 @@ from enum import StrEnum
 import numpy as np
 from numpy.typing import NDArray
 
-from localization.frames import LATEST, Buffer, TransformError
-from localization.messages import FRAME_OS_SENSOR, Header
-from planner import fused, kernels
-from planner.bridges import (
+from conesim.core.messages import FRAME_OS_SENSOR, Header
+from conesim.localization.frames import LATEST, Buffer, TransformError
+from conesim.planner import fused, kernels
+from conesim.planner.bridges import (
     Bridges,
     ConeSet,
     PairTable,
@@ -60,12 +60,12 @@ from planner.bridges import (
     delaunay_simplices,
     track_estimate,
 )
-from planner.classify import LEFT, RIGHT, ClassifiedCones
-from planner.config import MidlineConfig, SpeedProfileConfig
-from planner.geometry import FloatArray, arc_length
-from planner.messages import BridgeLines, LocalPath, Midpoints, Waypoints
-from planner.speed_profile import profile_speeds, speed_profile
-from planner.spline import fit_path
+from conesim.planner.classify import LEFT, RIGHT, ClassifiedCones
+from conesim.planner.config import MidlineConfig, SpeedProfileConfig
+from conesim.planner.geometry import FloatArray, arc_length
+from conesim.planner.messages import BridgeLines, LocalPath, Midpoints, Waypoints
+from conesim.planner.speed_profile import profile_speeds, speed_profile
+from conesim.planner.spline import fit_path
 
 SpeedFn = Callable[[FloatArray, "FloatArray | None"], FloatArray]
 """``speeds(path, s)``: the waypoints' speeds for a path and its arc length (or None)."""

@@ -30,10 +30,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner import kernels
-from planner.bridges import Bridges
-from planner.config import MidlineConfig
-from planner.geometry import FloatArray, IntArray, StationAxis
+from conesim.planner import kernels
+from conesim.planner.bridges import Bridges
+from conesim.planner.config import MidlineConfig
+from conesim.planner.geometry import FloatArray, IntArray, StationAxis
 
 
 def start_index(

@@ -27,8 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.config import PurePursuitConfig
-from planner.geometry import FloatArray
+from conesim.planner.config import PurePursuitConfig
+from conesim.planner.geometry import FloatArray
 
 _GRAVITY = 9.81  # [m/s^2]
 

@@ -20,8 +20,8 @@ import math
 
 import numpy as np
 
-from planner.config import SpeedControlConfig
-from planner.geometry import FloatArray, arc_length
+from conesim.planner.config import SpeedControlConfig
+from conesim.planner.geometry import FloatArray, arc_length
 
 
 def target_on_path(

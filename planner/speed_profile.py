@@ -65,9 +65,9 @@ import math
 
 import numpy as np
 
-from planner import kernels
-from planner.config import SpeedProfileConfig
-from planner.geometry import FloatArray
+from conesim.planner import kernels
+from conesim.planner.config import SpeedProfileConfig
+from conesim.planner.geometry import FloatArray
 
 _DEFAULT_CONFIG = SpeedProfileConfig()  # frozen: built once
 _NO_ARC = np.zeros(0)  # ``profile_limits``' s when it computes the arc length

@@ -28,9 +28,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.interpolate import splprep
 
-from planner import kernels
-from planner.config import MidlineConfig
-from planner.geometry import FloatArray, arc_length, resample_polyline
+from conesim.planner import kernels
+from conesim.planner.config import MidlineConfig
+from conesim.planner.geometry import FloatArray, arc_length, resample_polyline
 
 _SAMPLES_PER_STEP = 2  # spline samples per output step, for the arc length
 

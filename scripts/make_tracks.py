@@ -43,9 +43,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.ndimage import gaussian_filter1d
 
-from localization.global_path import global_path_from_centreline, write_global_path_csv
-from localization.pose import Pose2D
-from tracks import ConeKind, Layout, Track, check_report, read_track, write_track
+from conesim.core.pose import Pose2D
+from conesim.tracks import ConeKind, Layout, Track, check_report, read_track, write_track
+from conesim.tracks.global_path import global_path_from_centreline, write_global_path_csv
 
 FloatArray = NDArray[np.float64]
 

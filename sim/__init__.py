@@ -8,12 +8,12 @@ Nothing outside ``sim`` imports pymunk.
 
 from __future__ import annotations
 
-from sim.cones import ConeField, ConeParams
-from sim.race_control import RaceControl, RaceRules, RaceState
-from sim.sensors import SensorProfile, SensorSuite, TruthSample, get_profile
-from sim.vehicle import Vehicle, VehicleState
-from sim.vehicle_params import VehicleParams
-from sim.world import World, WorldConfig
+from conesim.sim.cones import ConeField, ConeParams
+from conesim.sim.race_control import RaceControl, RaceRules, RaceState
+from conesim.sim.sensors import SensorProfile, SensorSuite, TruthSample, get_profile
+from conesim.sim.vehicle import Vehicle, VehicleState
+from conesim.sim.vehicle_params import VehicleParams
+from conesim.sim.world import World, WorldConfig
 
 __all__ = [
     "ConeField",

@@ -29,7 +29,7 @@ import numpy as np
 import pymunk
 from numpy.typing import NDArray
 
-from sim.vehicle import VEHICLE_COLLISION_TYPE
+from conesim.sim.vehicle import VEHICLE_COLLISION_TYPE
 
 COLLISION_CAR = VEHICLE_COLLISION_TYPE
 COLLISION_CONE = 2

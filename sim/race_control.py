@@ -43,8 +43,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from localization.pose import Pose2D
-from sim.progress import PolylineProgress, segment_crossing, segment_crossing_xy
+from conesim.core.pose import Pose2D
+from conesim.sim.progress import PolylineProgress, segment_crossing, segment_crossing_xy
 
 
 @dataclass(frozen=True)

@@ -39,9 +39,9 @@ from dataclasses import dataclass
 
 import pymunk
 
-from localization.pose import Pose2D
-from sim.vehicle_dynamics import BodyVelocity, blended_wrench
-from sim.vehicle_params import VehicleParams
+from conesim.core.pose import Pose2D
+from conesim.sim.vehicle_dynamics import BodyVelocity, blended_wrench
+from conesim.sim.vehicle_params import VehicleParams
 
 #: pymunk collision type of the car's footprint.
 VEHICLE_COLLISION_TYPE = 1

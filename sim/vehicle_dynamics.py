@@ -74,8 +74,8 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-from sim.tyres import friction_ellipse, lateral_force, slip_angles
-from sim.vehicle_params import VehicleParams
+from conesim.sim.tyres import friction_ellipse, lateral_force, slip_angles
+from conesim.sim.vehicle_params import VehicleParams
 
 #: Speed floor for the power limit P / v [m/s].
 _POWER_SPEED_FLOOR = 0.1

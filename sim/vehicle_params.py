@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, fields
 
-from sim.tyres import PacejkaParams
+from conesim.sim.tyres import PacejkaParams
 
 
 @dataclass(frozen=True, slots=True)

@@ -25,16 +25,16 @@ from dataclasses import dataclass, field
 import numpy as np
 import pymunk
 
-from localization.geodesy import DEFAULT_ORIGIN, ReferenceOrigin
-from localization.messages import Message
-from localization.pose import Pose2D
-from sim.cones import ConeField, ConeParams
-from sim.race_control import RaceControl, RaceRules, RaceState, timed_lap_length
-from sim.sensors import SensorProfile, SensorSuite, TruthSample, get_profile
-from sim.sensors.cone_map import ConeMap
-from sim.vehicle import Vehicle, VehicleState
-from sim.vehicle_params import VehicleParams
-from tracks import Track
+from conesim.core.geodesy import DEFAULT_ORIGIN, ReferenceOrigin
+from conesim.core.messages import Message
+from conesim.core.pose import Pose2D
+from conesim.sim.cones import ConeField, ConeParams
+from conesim.sim.race_control import RaceControl, RaceRules, RaceState, timed_lap_length
+from conesim.sim.sensors import SensorProfile, SensorSuite, TruthSample, get_profile
+from conesim.sim.sensors.cone_map import ConeMap
+from conesim.sim.vehicle import Vehicle, VehicleState
+from conesim.sim.vehicle_params import VehicleParams
+from conesim.tracks import Track
 
 SLEEP_TIME_THRESHOLD = 0.5  # [s] idle time before pymunk puts a cone to sleep
 IDLE_SPEED_THRESHOLD = 0.02  # [m/s] below this a body counts as idle

@@ -1,4 +1,15 @@
-"""The one-way import rules of ARCHITECTURE.md, checked on the source tree."""
+"""The one-way import rules of docs/ARCHITECTURE.md, checked on the source tree.
+
+Every module of conesim imports the others as ``conesim.<package>``; the
+packages form layers, each importing only those below it::
+
+    core  <-  tracks  <-  sim  <-  localization  <-  planner  <-  envs
+
+with two cuts through the stack: ``localization`` and ``planner`` never
+import ``sim`` (the car's software sees messages, the frame tree and the
+global path, never the simulator's truth), and nothing but ``sim`` imports
+pymunk. ``core`` is the shared vocabulary and imports no other package.
+"""
 
 from __future__ import annotations
 
@@ -8,23 +19,33 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("tracks", "sim", "localization", "planner", "envs")
-# Dependency-free leaf modules of localization that the lower layers share, as
-# every ROS node shares geometry_msgs and sensor_msgs.
-LOCALIZATION_LEAVES = {"localization.pose", "localization.geodesy", "localization.messages"}
 
-# package -> project packages it may import (beyond the leaves above).
-ALLOWED: dict[str, set[str]] = {
-    "tracks": set(),
-    "sim": {"tracks"},
-    "localization": {"tracks", "sim"},
-    "planner": {"tracks", "localization"},
-    "envs": {"tracks", "sim", "localization", "planner"},
+FOLDERS = {
+    "core": ROOT / "conesim" / "core",
+    "tracks": ROOT / "tracks",
+    "sim": ROOT / "sim",
+    "localization": ROOT / "localization",
+    "planner": ROOT / "planner",
+    "envs": ROOT / "envs",
 }
+"""Each package of the ``conesim`` namespace and the folder it lives in."""
+
+ALLOWED: dict[str, set[str]] = {
+    "core": set(),
+    "tracks": {"core"},
+    "sim": {"core", "tracks"},
+    "localization": {"core", "tracks"},
+    "planner": {"core", "tracks", "localization"},
+    "envs": {"core", "tracks", "sim", "localization", "planner"},
+}
+"""package -> the other packages it may import."""
+
+OLD_NAMES = ("sim", "localization", "planner", "envs", "tracks")
 
 
 def imports_of(path: Path) -> set[str]:
-    """Absolute module names imported by one source file."""
+    """Absolute module names imported by one source file (relative ones resolved
+    against ``conesim``'s namespace are not used: the tree has none)."""
     tree = ast.parse(path.read_text(), filename=str(path))
     names: set[str] = set()
     for node in ast.walk(tree):
@@ -32,31 +53,50 @@ def imports_of(path: Path) -> set[str]:
             names.update(alias.name for alias in node.names)
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
             names.add(node.module)
+            if node.module == "conesim":  # from conesim import envs
+                names.update(f"conesim.{alias.name}" for alias in node.names)
     return names
 
 
 def sources(package: str) -> list[Path]:
     """Every Python file of a package."""
-    return sorted((ROOT / package).rglob("*.py"))
+    return sorted(FOLDERS[package].rglob("*.py"))
 
 
-@pytest.mark.parametrize("package", PACKAGES)
+def package_of(name: str) -> str | None:
+    """The conesim package a module name belongs to (``conesim.sim.world`` -> ``sim``)."""
+    parts = name.split(".")
+    if parts[0] != "conesim" or len(parts) < 2:
+        return None
+    return parts[1] if parts[1] in FOLDERS else None
+
+
+@pytest.mark.parametrize("package", list(FOLDERS))
 def test_imports_flow_one_way(package: str) -> None:
     """Each package imports only the layers below it (planner never imports sim)."""
     bad = []
     for path in sources(package):
         for name in imports_of(path):
-            top = name.split(".")[0]
-            if top not in PACKAGES or top == package:
-                continue
-            if any(name == leaf or name.startswith(leaf + ".") for leaf in LOCALIZATION_LEAVES):
-                continue
-            if top not in ALLOWED[package]:
+            other = package_of(name)
+            if other is not None and other != package and other not in ALLOWED[package]:
                 bad.append(f"{path.relative_to(ROOT)} imports {name}")
     assert not bad, "\n".join(bad)
 
 
-@pytest.mark.parametrize("package", [p for p in PACKAGES if p != "sim"])
+@pytest.mark.parametrize("package", list(FOLDERS))
+def test_imports_use_the_one_namespace(package: str) -> None:
+    """No module imports a package by its folder's bare name (``import envs``),
+    which a user's own ``envs/`` folder would shadow."""
+    bad = [
+        f"{path.relative_to(ROOT)} imports {name}"
+        for path in sources(package)
+        for name in imports_of(path)
+        if name.split(".")[0] in OLD_NAMES
+    ]
+    assert not bad, "\n".join(bad)
+
+
+@pytest.mark.parametrize("package", [p for p in FOLDERS if p != "sim"])
 def test_only_sim_imports_pymunk(package: str) -> None:
     """pymunk stays behind sim's own types."""
     bad = [
@@ -67,11 +107,14 @@ def test_only_sim_imports_pymunk(package: str) -> None:
     assert not bad
 
 
-def test_leaves_are_dependency_free() -> None:
-    """The shared localization leaves import no other project module but each other."""
-    for leaf in LOCALIZATION_LEAVES:
-        path = ROOT / (leaf.replace(".", "/") + ".py")
-        if not path.exists():
-            continue
-        project = {n for n in imports_of(path) if n.split(".")[0] in PACKAGES}
-        assert project <= LOCALIZATION_LEAVES, f"{leaf} imports {project - LOCALIZATION_LEAVES}"
+def test_the_top_package_imports_no_layer() -> None:
+    """``import conesim`` registers the env and loads no package of the stack."""
+    names = imports_of(ROOT / "conesim" / "__init__.py")
+    assert not {n for n in names if package_of(n) is not None}
+
+
+def test_the_rules_cover_every_package() -> None:
+    """Every folder of a package is in the rules, and the rules name no other."""
+    assert set(ALLOWED) == set(FOLDERS)
+    for package, folder in FOLDERS.items():
+        assert (folder / "__init__.py").is_file(), package

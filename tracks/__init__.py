@@ -1,26 +1,24 @@
-"""Cone tracks: the `Track` type, readers and writer, validator, shipped tracks.
+"""Cone tracks: the `Track` type, readers and writer, validator, global path, shipped tracks.
 
-The bottom layer of conesim: it imports numpy, scipy, yaml and the leaf
-module ``localization.pose`` only.
+The lowest layer above ``conesim.core``: it imports numpy, scipy, yaml and
+``conesim.core`` only.
 
->>> from tracks import load_track, check_report
+>>> from conesim.tracks import load_track, check_report
 >>> track = load_track("trackdrive")          # a shipped track, or a file path
 >>> report = check_report(track)              # FS rules as warnings, errors
 """
 
 from __future__ import annotations
 
-import logging
-
-from tracks.derived import SkidpadCircle, TrackGeometry
-from tracks.errors import TrackFormatError, TrackGeometryError, TrackNotFoundError
-from tracks.geometry import derive_start_pose, detect_layout
-from tracks.kinds import ConeKind, Layout
-from tracks.model import Track
-from tracks.readers import TrackFileFormat, detect_format, read_track
-from tracks.shipped import DEFAULT_TRACK, load_track, shipped_track_path, shipped_tracks
-from tracks.validate import ValidationReport, check_report, validate_track
-from tracks.writer import write_track
+from conesim.tracks.derived import SkidpadCircle, TrackGeometry
+from conesim.tracks.errors import TrackFormatError, TrackGeometryError, TrackNotFoundError
+from conesim.tracks.geometry import derive_start_pose, detect_layout
+from conesim.tracks.kinds import ConeKind, Layout
+from conesim.tracks.model import Track
+from conesim.tracks.readers import TrackFileFormat, detect_format, read_track
+from conesim.tracks.shipped import DEFAULT_TRACK, load_track, shipped_track_path, shipped_tracks
+from conesim.tracks.validate import ValidationReport, check_report, validate_track
+from conesim.tracks.writer import write_track
 
 __all__ = [
     "DEFAULT_TRACK",
@@ -45,6 +43,3 @@ __all__ = [
     "validate_track",
     "write_track",
 ]
-
-# A library logs, the application shows (see ``localization/__init__``).
-logging.getLogger(__name__).addHandler(logging.NullHandler())

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from tracks.kinds import ConeKind
+from conesim.tracks.kinds import ConeKind
 
 FloatArray = NDArray[np.float64]
 

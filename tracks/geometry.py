@@ -13,14 +13,14 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from localization.pose import Pose2D
-from tracks.derived import TrackGeometry
-from tracks.errors import TrackGeometryError
-from tracks.kinds import ConeKind, Layout
-from tracks.lanes import MIN_SIDE_CONES, lane_geometry
-from tracks.ordering import order_loop
-from tracks.polyline import cumulative_length
-from tracks.skidpad import find_circles, skidpad_geometry
+from conesim.core.pose import Pose2D
+from conesim.tracks.derived import TrackGeometry
+from conesim.tracks.errors import TrackGeometryError
+from conesim.tracks.kinds import ConeKind, Layout
+from conesim.tracks.lanes import MIN_SIDE_CONES, lane_geometry
+from conesim.tracks.ordering import order_loop
+from conesim.tracks.polyline import cumulative_length
+from conesim.tracks.skidpad import find_circles, skidpad_geometry
 
 FloatArray = NDArray[np.float64]
 

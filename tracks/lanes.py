@@ -22,13 +22,13 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from localization.pose import Pose2D
-from tracks.derived import TrackGeometry
-from tracks.errors import TrackGeometryError
-from tracks.kinds import ConeKind
-from tracks.midline import Midline, centreline_between
-from tracks.ordering import order_loop, order_path
-from tracks.polyline import (
+from conesim.core.pose import Pose2D
+from conesim.tracks.derived import TrackGeometry
+from conesim.tracks.errors import TrackGeometryError
+from conesim.tracks.kinds import ConeKind
+from conesim.tracks.midline import Midline, centreline_between
+from conesim.tracks.ordering import order_loop, order_path
+from conesim.tracks.polyline import (
     cumulative_length,
     curvature,
     interpolate_at,
@@ -37,7 +37,7 @@ from tracks.polyline import (
     signed_area,
     tangents,
 )
-from tracks.timing import TimingLine, big_orange_lines, perpendicular_line
+from conesim.tracks.timing import TimingLine, big_orange_lines, perpendicular_line
 
 FloatArray = NDArray[np.float64]
 

@@ -24,8 +24,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from tracks.errors import TrackGeometryError
-from tracks.polyline import cumulative_length, spline_curve
+from conesim.tracks.errors import TrackGeometryError
+from conesim.tracks.polyline import cumulative_length, spline_curve
 
 FloatArray = NDArray[np.float64]
 

@@ -11,11 +11,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from localization.pose import Pose2D
-from tracks.derived import TrackGeometry
-from tracks.errors import TrackFormatError
-from tracks.geometry import build_geometry
-from tracks.kinds import CONE_KINDS, ConeKind, Layout
+from conesim.core.pose import Pose2D
+from conesim.tracks.derived import TrackGeometry
+from conesim.tracks.errors import TrackFormatError
+from conesim.tracks.geometry import build_geometry
+from conesim.tracks.kinds import CONE_KINDS, ConeKind, Layout
 
 FloatArray = NDArray[np.float64]
 

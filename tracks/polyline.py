@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import splev, splprep
 
-from tracks.errors import TrackGeometryError
+from conesim.tracks.errors import TrackGeometryError
 
 FloatArray = NDArray[np.float64]
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from localization.pose import Pose2D
-from tracks.kinds import ConeKind, Layout
+from conesim.core.pose import Pose2D
+from conesim.tracks.kinds import ConeKind, Layout
 
 
 @dataclass(frozen=True)

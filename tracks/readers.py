@@ -26,14 +26,14 @@ import numpy as np
 import yaml
 from scipy.spatial import cKDTree
 
-from tracks import readers_csv, readers_yaml
-from tracks.errors import TrackFormatError
-from tracks.geometry import derive_start_pose, detect_layout
-from tracks.kinds import ConeKind
-from tracks.lanes import MIN_SIDE_CONES
-from tracks.model import MAX_COORDINATE, Track
-from tracks.rawtrack import RawTrack
-from tracks.yamlnodes import compose, mapping
+from conesim.tracks import readers_csv, readers_yaml
+from conesim.tracks.errors import TrackFormatError
+from conesim.tracks.geometry import derive_start_pose, detect_layout
+from conesim.tracks.kinds import ConeKind
+from conesim.tracks.lanes import MIN_SIDE_CONES
+from conesim.tracks.model import MAX_COORDINATE, Track
+from conesim.tracks.rawtrack import RawTrack
+from conesim.tracks.yamlnodes import compose, mapping
 
 MAX_FILE_BYTES = 20_000_000  # a track file is kilobytes; anything this large is not one
 _log = logging.getLogger(__name__)

@@ -19,10 +19,10 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from localization.pose import Pose2D
-from tracks.errors import TrackFormatError
-from tracks.kinds import ConeKind
-from tracks.rawtrack import RawCone, RawTrack
+from conesim.core.pose import Pose2D
+from conesim.tracks.errors import TrackFormatError
+from conesim.tracks.kinds import ConeKind
+from conesim.tracks.rawtrack import RawCone, RawTrack
 
 COLUMNS = ("tag", "x", "y", "direction", "x_variance", "y_variance", "xy_covariance")
 EUFS_HEADER = ",".join(COLUMNS)

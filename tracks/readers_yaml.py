@@ -34,11 +34,11 @@ from pathlib import Path
 
 import yaml
 
-from localization.pose import Pose2D
-from tracks import yamlnodes as yn
-from tracks.errors import TrackFormatError
-from tracks.kinds import CONE_KINDS, ConeKind, Layout
-from tracks.rawtrack import RawCone, RawTrack
+from conesim.core.pose import Pose2D
+from conesim.tracks import yamlnodes as yn
+from conesim.tracks.errors import TrackFormatError
+from conesim.tracks.kinds import CONE_KINDS, ConeKind, Layout
+from conesim.tracks.rawtrack import RawCone, RawTrack
 
 FORMAT_VERSION = 1
 OWN_REQUIRED = {"conesim_track", "name", "layout", "cones"}

@@ -15,9 +15,9 @@ from functools import cache
 from importlib.resources import as_file, files
 from pathlib import Path
 
-from tracks.errors import TrackNotFoundError
-from tracks.model import Track
-from tracks.readers import read_track
+from conesim.tracks.errors import TrackNotFoundError
+from conesim.tracks.model import Track
+from conesim.tracks.readers import read_track
 
 DEFAULT_TRACK = "trackdrive"
 """The track used when none is named: a gentle FS trackdrive-style loop."""
@@ -30,7 +30,7 @@ atexit.register(_extracted.close)
 
 def shipped_tracks() -> list[str]:
     """Names of the shipped tracks, sorted."""
-    data = files("tracks").joinpath(_DATA)
+    data = files("conesim.tracks").joinpath(_DATA)
     if not data.is_dir():
         return []
     return sorted(
@@ -45,7 +45,7 @@ _extraction: list[Path] = []  # where a zipped install's data was extracted, onc
 
 def shipped_data_dir() -> Path:
     """The directory holding the shipped track files (extracted once for a zipped install)."""
-    data = files("tracks").joinpath(_DATA)
+    data = files("conesim.tracks").joinpath(_DATA)
     if isinstance(data, Path):
         return data
     if not _extraction:
@@ -55,7 +55,7 @@ def shipped_data_dir() -> Path:
 
 def is_shipped_file(path: Path) -> bool:
     """Whether ``path`` is one of the shipped data files (nothing is extracted to tell)."""
-    data = files("tracks").joinpath(_DATA)
+    data = files("conesim.tracks").joinpath(_DATA)
     base = data if isinstance(data, Path) else (_extraction[0] if _extraction else None)
     return base is not None and path.resolve().is_relative_to(base.resolve())
 

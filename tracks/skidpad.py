@@ -35,11 +35,11 @@ from numpy.typing import NDArray
 from scipy.cluster.vq import kmeans2
 from scipy.optimize import least_squares
 
-from localization.pose import Pose2D
-from tracks.derived import SkidpadCircle, TrackGeometry
-from tracks.errors import TrackGeometryError
-from tracks.kinds import ConeKind
-from tracks.polyline import cumulative_length, curvature, resample, tangents
+from conesim.core.pose import Pose2D
+from conesim.tracks.derived import SkidpadCircle, TrackGeometry
+from conesim.tracks.errors import TrackGeometryError
+from conesim.tracks.kinds import ConeKind
+from conesim.tracks.polyline import cumulative_length, curvature, resample, tangents
 
 FloatArray = NDArray[np.float64]
 

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from tracks.midline import Midline
-from tracks.polyline import cumulative_length, interpolate_at, project, tangents
+from conesim.tracks.midline import Midline
+from conesim.tracks.polyline import cumulative_length, interpolate_at, project, tangents
 
 FloatArray = NDArray[np.float64]
 

@@ -34,12 +34,13 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.ndimage import uniform_filter1d
 
-from tracks.derived import TrackGeometry
-from tracks.errors import TrackFormatError
-from tracks.kinds import ConeKind, Layout
-from tracks.lanes import LANE_END_FINISH_M, MIN_SIDE_CONES
-from tracks.model import Track
-from tracks.polyline import project, ring, segment_crossings
+from conesim.tracks.derived import TrackGeometry
+from conesim.tracks.errors import TrackFormatError
+from conesim.tracks.global_path import global_path_findings, global_path_for_track
+from conesim.tracks.kinds import ConeKind, Layout
+from conesim.tracks.lanes import LANE_END_FINISH_M, MIN_SIDE_CONES
+from conesim.tracks.model import Track
+from conesim.tracks.polyline import project, ring, segment_crossings
 
 FloatArray = NDArray[np.float64]
 
@@ -117,7 +118,14 @@ def validate_track(track: Track) -> ValidationReport:
 
 
 def check_report(track: Track) -> dict[str, Any]:
-    """The validator's findings as one JSON-able dict.
+    """The validator's findings as one JSON-able dict, the global path's included.
+
+    The track's global path (``global_path_for_track``) is checked against
+    the track too (``global_path_findings``); a track whose geometry cannot
+    be derived has no path to check (its errors say why).
+
+    Raises:
+        GlobalPathError: the track's global path file is malformed.
 
     Returns:
         ``{"cones": {"blue": n, "yellow": n, "orange": n, "big_orange": n,
@@ -126,6 +134,15 @@ def check_report(track: Track) -> dict[str, Any]:
         1 mm (NaN when no geometry can be derived: see ``errors``).
     """
     report = validate_track(track)
+    warnings, errors = list(report.warnings), list(report.errors)
+    try:
+        path = global_path_for_track(track)
+    except TrackFormatError:
+        pass
+    else:
+        path_warnings, path_errors = global_path_findings(track, path)
+        warnings += path_warnings
+        errors += path_errors
     try:
         geometry = track.geometry
         length, w_min, w_max = geometry.length_m, geometry.widths.min(), geometry.widths.max()
@@ -136,8 +153,8 @@ def check_report(track: Track) -> dict[str, Any]:
         "length_m": round(float(length), 3),
         "width_min_m": round(float(w_min), 3),
         "width_max_m": round(float(w_max), 3),
-        "warnings": list(report.warnings),
-        "errors": list(report.errors),
+        "warnings": warnings,
+        "errors": errors,
     }
 
 

@@ -19,10 +19,10 @@ from typing import Any
 
 import yaml
 
-from tracks.kinds import CONE_KINDS
-from tracks.model import Track
-from tracks.readers_yaml import FORMAT_VERSION
-from tracks.shipped import is_shipped_file
+from conesim.tracks.kinds import CONE_KINDS
+from conesim.tracks.model import Track
+from conesim.tracks.readers_yaml import FORMAT_VERSION
+from conesim.tracks.shipped import is_shipped_file
 
 
 def track_document(

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import yaml
 
-from tracks.errors import TrackFormatError
+from conesim.tracks.errors import TrackFormatError
 
 _FLOAT_SPECIALS = {".inf", "+.inf", "-.inf", ".nan"}
 # libyaml's loader when PyYAML has it (10x faster); both keep node positions.

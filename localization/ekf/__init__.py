@@ -22,11 +22,11 @@ and benchmarks; not used by the pipeline).
 
 from __future__ import annotations
 
-from localization.ekf.config import PROFILES, EkfConfig, for_profile
-from localization.ekf.estimate import Estimate
-from localization.ekf.filter import FusionEkf, NotInitialisedError
-from localization.ekf.health import Health, RejectReason, Sensor, UpdateResult
-from localization.ekf.model import StateLayout
+from conesim.localization.ekf.config import PROFILES, EkfConfig, for_profile
+from conesim.localization.ekf.estimate import Estimate
+from conesim.localization.ekf.filter import FusionEkf, NotInitialisedError
+from conesim.localization.ekf.health import Health, RejectReason, Sensor, UpdateResult
+from conesim.localization.ekf.model import StateLayout
 
 __all__ = [
     "PROFILES",

@@ -15,9 +15,9 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from localization.ekf.model import ProcessModel, StateLayout
-from localization.geodesy import DEFAULT_ORIGIN, ReferenceOrigin
-from localization.messages import FRAME_GPS_ANTENNA, FRAME_REFERENCE
+from conesim.core.geodesy import DEFAULT_ORIGIN, ReferenceOrigin
+from conesim.core.messages import FRAME_GPS_ANTENNA, FRAME_REFERENCE
+from conesim.localization.ekf.model import ProcessModel, StateLayout
 
 
 @dataclass(frozen=True, slots=True)

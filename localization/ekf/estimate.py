@@ -7,8 +7,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from localization.ekf.model import VX, VY, YAW, X, wrap_yaw
-from localization.pose import Pose2D, wrap_angle
+from conesim.core.pose import Pose2D, wrap_angle
+from conesim.localization.ekf.model import VX, VY, YAW, X, wrap_yaw
 
 FloatArray = NDArray[np.float64]
 

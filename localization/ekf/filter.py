@@ -71,21 +71,21 @@ from filterpy.kalman import ExtendedKalmanFilter
 from numpy.typing import NDArray
 from scipy.stats import chi2
 
-from localization.ekf import kernels
-from localization.ekf import model as m
-from localization.ekf.config import EkfConfig
-from localization.ekf.estimate import Estimate
-from localization.ekf.health import Health, RejectReason, Sensor, UpdateResult
-from localization.ekf.history import Entry, History, Snapshot, order_key
-from localization.ekf.measurements import InvalidMessage, Measurement, to_measurement
-from localization.messages import Message
-from localization.pose import wrap_angle
+from conesim.core.messages import Message
+from conesim.core.pose import wrap_angle
+from conesim.localization.ekf import kernels
+from conesim.localization.ekf import model as m
+from conesim.localization.ekf.config import EkfConfig
+from conesim.localization.ekf.estimate import Estimate
+from conesim.localization.ekf.health import Health, RejectReason, Sensor, UpdateResult
+from conesim.localization.ekf.history import Entry, History, Snapshot, order_key
+from conesim.localization.ekf.measurements import InvalidMessage, Measurement, to_measurement
 
 ESTIMATE_CACHE_SIZE = 8  # estimates kept (per stamp) for repeated calls
 
 FloatArray = NDArray[np.float64]
 
-_log = logging.getLogger("localization.ekf")
+_log = logging.getLogger("conesim.localization.ekf")
 
 # Per-sample input covariance assumed before the first IMU sample [rad^2/s^2, m^2/s^4].
 NO_IMU_COV = np.diag([1.0, 100.0, 100.0])

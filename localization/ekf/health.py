@@ -21,7 +21,7 @@ from typing import Final
 
 LOG_EVERY: Final = 100
 
-_log = logging.getLogger("localization.ekf")
+_log = logging.getLogger("conesim.localization.ekf")
 
 
 class Sensor(StrEnum):

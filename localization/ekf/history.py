@@ -23,8 +23,8 @@ from typing import Final, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from localization.ekf.health import Sensor
-from localization.ekf.measurements import Measurement
+from conesim.localization.ekf.health import Sensor
+from conesim.localization.ekf.measurements import Measurement
 
 FloatArray = NDArray[np.float64]
 

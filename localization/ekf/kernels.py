@@ -35,7 +35,7 @@ from typing import Any, Final
 
 import numpy as np
 
-from localization.compiled import cached_njit
+from conesim.core.compiled import cached_njit
 
 # Layout of ``motion_terms``'s ``params``.
 GPS_TAU, HEADING_TAU, QA, QW, QB, QS, GPS_VAR, HEADING_VAR = range(8)
@@ -48,7 +48,7 @@ def _probe() -> None:
 
 # Cached beside this file (or under NUMBA_CACHE_DIR); with no writable cache
 # directory, compiled in every process (a cold compile: see the module docstring).
-_compiled = cached_njit(_probe, "localization.ekf.kernels")
+_compiled = cached_njit(_probe, "conesim.localization.ekf.kernels")
 
 
 @_compiled

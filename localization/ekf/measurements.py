@@ -30,13 +30,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from localization.ekf.config import EkfConfig
-from localization.ekf.health import RejectReason, Sensor
-from localization.ekf.model import wrap_yaw
-from localization.frames.transform import strip_leading_slash
-from localization.geodesy import GeodesyError
-from localization.gps_to_local import gps_to_local_cartesian
-from localization.messages import HeadingStamped, Imu, Message, NavSatFix, NavSatStatus, WheelSpeed
+from conesim.core.geodesy import GeodesyError
+from conesim.core.messages import HeadingStamped, Imu, Message, NavSatFix, NavSatStatus, WheelSpeed
+from conesim.localization.ekf.config import EkfConfig
+from conesim.localization.ekf.health import RejectReason, Sensor
+from conesim.localization.ekf.model import wrap_yaw
+from conesim.localization.frames.transform import strip_leading_slash
+from conesim.localization.gps_to_local import gps_to_local_cartesian
 
 FloatArray = NDArray[np.float64]
 

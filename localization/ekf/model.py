@@ -106,7 +106,7 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
-from localization.ekf import kernels
+from conesim.localization.ekf import kernels
 
 FloatArray = NDArray[np.float64]
 

@@ -29,8 +29,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_ivp
 
-from localization.geodesy import local_cartesian_to_gps
-from localization.messages import (
+from conesim.core.geodesy import local_cartesian_to_gps
+from conesim.core.messages import (
     FRAME_GPS_ANTENNA,
     FRAME_REFERENCE,
     Header,
@@ -40,7 +40,7 @@ from localization.messages import (
     NavSatFix,
     WheelSpeed,
 )
-from localization.pose import Pose2D, wrap_angle
+from conesim.core.pose import Pose2D, wrap_angle
 
 FloatArray = NDArray[np.float64]
 TWO_PI = 2.0 * math.pi

@@ -28,9 +28,9 @@ history, interpolation and pruning), :mod:`.buffer` (the tree and lookups),
 
 from __future__ import annotations
 
-from localization.frames.buffer import DEFAULT_AUTHORITY, LATEST, Buffer, FrameInfo
-from localization.frames.cache import DEFAULT_CACHE_TIME, StaticCache, TimeCache
-from localization.frames.errors import (
+from conesim.localization.frames.buffer import DEFAULT_AUTHORITY, LATEST, Buffer, FrameInfo
+from conesim.localization.frames.cache import DEFAULT_CACHE_TIME, StaticCache, TimeCache
+from conesim.localization.frames.errors import (
     ConnectivityError,
     ExtrapolationError,
     FrameNotFoundError,
@@ -39,7 +39,7 @@ from localization.frames.errors import (
     InvalidTransformError,
     TransformError,
 )
-from localization.frames.transform import (
+from conesim.localization.frames.transform import (
     QUATERNION_TOLERANCE,
     TransformStamped,
     strip_leading_slash,

@@ -57,9 +57,10 @@ from typing import Final, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from localization.frames import rigid
-from localization.frames.cache import DEFAULT_CACHE_TIME, FrameCache, StaticCache, TimeCache
-from localization.frames.errors import (
+from conesim.core.pose import Pose2D, wrap_angle
+from conesim.localization.frames import rigid
+from conesim.localization.frames.cache import DEFAULT_CACHE_TIME, FrameCache, StaticCache, TimeCache
+from conesim.localization.frames.errors import (
     ConnectivityError,
     ExtrapolationError,
     FrameNotFoundError,
@@ -70,13 +71,12 @@ from localization.frames.errors import (
     TransformError,
     full_lookup_context,
 )
-from localization.frames.rigid import Rigid
-from localization.frames.transform import (
+from conesim.localization.frames.rigid import Rigid
+from conesim.localization.frames.transform import (
     TransformStamped,
     strip_leading_slash,
     transform_points_rigid,
 )
-from localization.pose import Pose2D, wrap_angle
 
 LATEST: Final[float] = 0.0
 """Lookup time meaning "the latest time common to the whole chain" (tf2's ``Time(0)``)."""

@@ -34,9 +34,9 @@ from __future__ import annotations
 from bisect import bisect_left
 from typing import Final, TypeAlias
 
-from localization.frames import rigid
-from localization.frames.errors import ExtrapolationError
-from localization.frames.rigid import Rigid, SlerpStep
+from conesim.localization.frames import rigid
+from conesim.localization.frames.errors import ExtrapolationError
+from conesim.localization.frames.rigid import Rigid, SlerpStep
 
 DEFAULT_CACHE_TIME: Final[float] = 10.0
 """tf2's default cache length [s]."""

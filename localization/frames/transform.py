@@ -28,10 +28,10 @@ from typing import Final
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from localization.frames import rigid
-from localization.frames.errors import InvalidArgumentError, InvalidTransformError
-from localization.frames.rigid import Rigid
-from localization.pose import Pose2D, wrap_angle
+from conesim.core.pose import Pose2D, wrap_angle
+from conesim.localization.frames import rigid
+from conesim.localization.frames.errors import InvalidArgumentError, InvalidTransformError
+from conesim.localization.frames.rigid import Rigid
 
 QUATERNION_TOLERANCE: Final[float] = 1e-6
 """Largest accepted deviation of ``|q|`` from 1 (dimensionless)."""

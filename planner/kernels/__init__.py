@@ -65,15 +65,15 @@ source file); every kernel is re-exported here, so callers write
 
 from __future__ import annotations
 
-from planner.kernels.bridges import boundary_edges, delaunay_edges, find_bridges
-from planner.kernels.cone_points import ground_points, side_of_path, with_tips
-from planner.kernels.ordering import chain_nearest, ordered_midpoints, start_index
-from planner.kernels.partners import partner_points, partners_needed
-from planner.kernels.polyline import arc_length, crosses_boundary, polyline_crosses
-from planner.kernels.projection import nearest_segments, project_rows, window_overlaps
-from planner.kernels.speed_profile import profile_limits, profile_passes
-from planner.kernels.spline import spline_path
-from planner.kernels.track import (
+from conesim.planner.kernels.bridges import boundary_edges, delaunay_edges, find_bridges
+from conesim.planner.kernels.cone_points import ground_points, side_of_path, with_tips
+from conesim.planner.kernels.ordering import chain_nearest, ordered_midpoints, start_index
+from conesim.planner.kernels.partners import partner_points, partners_needed
+from conesim.planner.kernels.polyline import arc_length, crosses_boundary, polyline_crosses
+from conesim.planner.kernels.projection import nearest_segments, project_rows, window_overlaps
+from conesim.planner.kernels.speed_profile import profile_limits, profile_passes
+from conesim.planner.kernels.spline import spline_path
+from conesim.planner.kernels.track import (
     boundary_cones,
     boundary_offset,
     estimate_track,

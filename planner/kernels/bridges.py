@@ -12,8 +12,8 @@ import math
 
 import numpy as np
 
-from localization.compiled import cached_njit
-from planner.kernels._common import true_rows, wrapped_difference
+from conesim.core.compiled import cached_njit
+from conesim.planner.kernels._common import true_rows, wrapped_difference
 
 
 def _probe() -> None:
@@ -22,7 +22,7 @@ def _probe() -> None:
 
 # Cached beside this file (or under NUMBA_CACHE_DIR); with no writable cache
 # directory, compiled in every process (a cold compile: see the package docstring).
-_compiled = cached_njit(_probe, "planner.kernels.bridges")
+_compiled = cached_njit(_probe, "conesim.planner.kernels.bridges")
 
 
 @_compiled

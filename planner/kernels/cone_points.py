@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from localization.compiled import cached_njit
+from conesim.core.compiled import cached_njit
 
 
 def _probe() -> None:
@@ -19,7 +19,7 @@ def _probe() -> None:
 
 # Cached beside this file (or under NUMBA_CACHE_DIR); with no writable cache
 # directory, compiled in every process (a cold compile: see the package docstring).
-_compiled = cached_njit(_probe, "planner.kernels.cone_points")
+_compiled = cached_njit(_probe, "conesim.planner.kernels.cone_points")
 
 
 @_compiled

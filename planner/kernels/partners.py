@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from localization.compiled import cached_njit
-from planner.kernels._common import true_rows
-from planner.kernels.track import boundary_offset
+from conesim.core.compiled import cached_njit
+from conesim.planner.kernels._common import true_rows
+from conesim.planner.kernels.track import boundary_offset
 
 
 def _probe() -> None:
@@ -19,7 +19,7 @@ def _probe() -> None:
 
 # Cached beside this file (or under NUMBA_CACHE_DIR); with no writable cache
 # directory, compiled in every process (a cold compile: see the package docstring).
-_compiled = cached_njit(_probe, "planner.kernels.partners")
+_compiled = cached_njit(_probe, "conesim.planner.kernels.partners")
 
 
 @_compiled

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from localization.compiled import cached_njit
+from conesim.core.compiled import cached_njit
 
 
 def _probe() -> None:
@@ -17,7 +17,7 @@ def _probe() -> None:
 
 # Cached beside this file (or under NUMBA_CACHE_DIR); with no writable cache
 # directory, compiled in every process (a cold compile: see the package docstring).
-_compiled = cached_njit(_probe, "planner.kernels.polyline")
+_compiled = cached_njit(_probe, "conesim.planner.kernels.polyline")
 
 
 @_compiled

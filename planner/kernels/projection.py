@@ -12,8 +12,8 @@ import math
 
 import numpy as np
 
-from localization.compiled import cached_njit
-from planner.kernels._common import wrapped_difference
+from conesim.core.compiled import cached_njit
+from conesim.planner.kernels._common import wrapped_difference
 
 
 def _probe() -> None:
@@ -22,7 +22,7 @@ def _probe() -> None:
 
 # Cached beside this file (or under NUMBA_CACHE_DIR); with no writable cache
 # directory, compiled in every process (a cold compile: see the package docstring).
-_compiled = cached_njit(_probe, "planner.kernels.projection")
+_compiled = cached_njit(_probe, "conesim.planner.kernels.projection")
 
 # Columns of ``PathProjector``'s segment table (``geometry``).
 _SX, _SY, _DX, _DY, _INV_LEN2, _MID_STATION, _HALF_LENGTH, _LENGTH, _STATION0 = range(9)

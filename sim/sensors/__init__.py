@@ -9,22 +9,22 @@ once per physics step with a ``TruthSample``, it returns the messages
 
 from __future__ import annotations
 
-from sim.sensors.cone_detector import ConeDetector, ConeDetectorConfig
-from sim.sensors.cone_map import ConeMap
-from sim.sensors.gps import GpsConfig, GpsReceiver
-from sim.sensors.heading import HeadingConfig, HeadingSensor
-from sim.sensors.imu import ImuConfig, ImuSensor
-from sim.sensors.profiles import (
+from conesim.sim.sensors.cone_detector import ConeDetector, ConeDetectorConfig
+from conesim.sim.sensors.cone_map import ConeMap
+from conesim.sim.sensors.gps import GpsConfig, GpsReceiver
+from conesim.sim.sensors.heading import HeadingConfig, HeadingSensor
+from conesim.sim.sensors.imu import ImuConfig, ImuSensor
+from conesim.sim.sensors.profiles import (
     DEFAULT_PROFILE,
     PROFILES,
     SensorProfile,
     get_profile,
     override,
 )
-from sim.sensors.suite import SENSOR_ORDER, SensorSuite
-from sim.sensors.timing import CaptureClock, SensorTiming
-from sim.sensors.truth import TruthSample
-from sim.sensors.wheel_speed import WheelSpeedConfig, WheelSpeedSensor
+from conesim.sim.sensors.suite import SENSOR_ORDER, SensorSuite
+from conesim.sim.sensors.timing import CaptureClock, SensorTiming
+from conesim.sim.sensors.truth import TruthSample
+from conesim.sim.sensors.wheel_speed import WheelSpeedConfig, WheelSpeedSensor
 
 __all__ = [
     "DEFAULT_PROFILE",

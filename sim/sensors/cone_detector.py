@@ -38,24 +38,24 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from localization.messages import CONE_COLOURS, FRAME_OS_SENSOR, ConeDetections, Header
-from sim.sensors.cone_colour import (
+from conesim.core.messages import CONE_COLOURS, FRAME_OS_SENSOR, ConeDetections, Header
+from conesim.sim.sensors.cone_colour import (
     IDENTITY_CONFUSION,
     KIND_TO_CLASS,
     check_confusion,
     sample_colours,
 )
-from sim.sensors.cone_map import (
+from conesim.sim.sensors.cone_map import (
     SMALL_CONE_HEIGHT,
     cone_heights,
     cone_radii,
     kind_codes,
 )
-from sim.sensors.occlusion import occluded
-from sim.sensors.streams import stream
-from sim.sensors.timing import SensorTiming
-from sim.sensors.truth import TruthSample
-from sim.sensors.validation import (
+from conesim.sim.sensors.occlusion import occluded
+from conesim.sim.sensors.streams import stream
+from conesim.sim.sensors.timing import SensorTiming
+from conesim.sim.sensors.truth import TruthSample
+from conesim.sim.sensors.validation import (
     check_interval,
     check_non_negative,
     check_positive,

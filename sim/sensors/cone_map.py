@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
-from localization.messages import CONE_COLOURS
+from conesim.core.messages import CONE_COLOURS
 
 SMALL_CONE_RADIUS = 0.114  # [m] half of the 228 mm base (FSG handbook)
 BIG_CONE_RADIUS = 0.1425  # [m] half of the 285 mm base (FSG handbook)

@@ -32,18 +32,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from localization.geodesy import (
+from conesim.core.geodesy import (
     DEFAULT_ORIGIN,
     R_EARTH,
     ReferenceOrigin,
     local_cartesian_to_gps,
 )
-from localization.messages import FRAME_GPS_ANTENNA, Header, NavSatFix, NavSatStatus
-from sim.sensors.noise import GaussMarkov
-from sim.sensors.streams import stream
-from sim.sensors.timing import SensorTiming
-from sim.sensors.truth import TruthSample
-from sim.sensors.validation import (
+from conesim.core.messages import FRAME_GPS_ANTENNA, Header, NavSatFix, NavSatStatus
+from conesim.sim.sensors.noise import GaussMarkov
+from conesim.sim.sensors.streams import stream
+from conesim.sim.sensors.timing import SensorTiming
+from conesim.sim.sensors.truth import TruthSample
+from conesim.sim.sensors.validation import (
     check_choice,
     check_non_negative,
     check_positive,

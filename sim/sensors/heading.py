@@ -14,13 +14,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from localization.messages import FRAME_REFERENCE, Header, HeadingStamped
-from localization.pose import wrap_angle
-from sim.sensors.noise import GaussMarkov
-from sim.sensors.streams import stream
-from sim.sensors.timing import SensorTiming
-from sim.sensors.truth import TruthSample
-from sim.sensors.validation import check_non_negative, check_positive
+from conesim.core.messages import FRAME_REFERENCE, Header, HeadingStamped
+from conesim.core.pose import wrap_angle
+from conesim.sim.sensors.noise import GaussMarkov
+from conesim.sim.sensors.streams import stream
+from conesim.sim.sensors.timing import SensorTiming
+from conesim.sim.sensors.truth import TruthSample
+from conesim.sim.sensors.validation import check_non_negative, check_positive
 
 
 @dataclass(frozen=True)

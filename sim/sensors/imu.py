@@ -24,12 +24,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from localization.messages import FRAME_GPS_ANTENNA, Header, Imu
-from sim.sensors.noise import BiasRandomWalk, white_sigma
-from sim.sensors.streams import stream
-from sim.sensors.timing import SensorTiming
-from sim.sensors.truth import TruthSample
-from sim.sensors.validation import check_non_negative
+from conesim.core.messages import FRAME_GPS_ANTENNA, Header, Imu
+from conesim.sim.sensors.noise import BiasRandomWalk, white_sigma
+from conesim.sim.sensors.streams import stream
+from conesim.sim.sensors.timing import SensorTiming
+from conesim.sim.sensors.truth import TruthSample
+from conesim.sim.sensors.validation import check_non_negative
 
 STANDARD_GRAVITY = 9.80665  # [m/s^2]
 

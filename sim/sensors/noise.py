@@ -33,7 +33,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.sensors.validation import check_non_negative, check_positive
+from conesim.sim.sensors.validation import check_non_negative, check_positive
 
 
 def white_sigma(density: float, dt: float) -> float:

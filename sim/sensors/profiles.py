@@ -26,11 +26,11 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from localization.messages import NavSatStatus
-from sim.sensors.cone_detector import ConeDetectorConfig
-from sim.sensors.gps import GpsConfig
-from sim.sensors.heading import HeadingConfig
-from sim.sensors.imu import (
+from conesim.core.messages import NavSatStatus
+from conesim.sim.sensors.cone_detector import ConeDetectorConfig
+from conesim.sim.sensors.gps import GpsConfig
+from conesim.sim.sensors.heading import HeadingConfig
+from conesim.sim.sensors.imu import (
     ADIS16448_ACCEL_DENSITY,
     ADIS16448_GYRO_DENSITY,
     MPU6000_ACCEL_BIAS_WALK,
@@ -39,7 +39,7 @@ from sim.sensors.imu import (
     MPU6000_GYRO_DENSITY,
     ImuConfig,
 )
-from sim.sensors.wheel_speed import WheelSpeedConfig
+from conesim.sim.sensors.wheel_speed import WheelSpeedConfig
 
 SECTIONS = ("gps", "heading", "imu", "wheel_speed", "cones")
 

@@ -29,17 +29,17 @@ import math
 from collections import deque
 from typing import Protocol
 
-from localization.geodesy import DEFAULT_ORIGIN, ReferenceOrigin
-from localization.messages import Message
-from sim.sensors.cone_detector import ConeDetector
-from sim.sensors.gps import GpsReceiver
-from sim.sensors.heading import HeadingSensor
-from sim.sensors.imu import ImuSensor
-from sim.sensors.profiles import DEFAULT_PROFILE, SECTIONS, SensorProfile, get_profile
-from sim.sensors.timing import TIME_EPS, CaptureClock, SensorTiming
-from sim.sensors.truth import TruthSample
-from sim.sensors.validation import check_non_negative, check_positive, check_probability
-from sim.sensors.wheel_speed import WheelSpeedSensor
+from conesim.core.geodesy import DEFAULT_ORIGIN, ReferenceOrigin
+from conesim.core.messages import Message
+from conesim.sim.sensors.cone_detector import ConeDetector
+from conesim.sim.sensors.gps import GpsReceiver
+from conesim.sim.sensors.heading import HeadingSensor
+from conesim.sim.sensors.imu import ImuSensor
+from conesim.sim.sensors.profiles import DEFAULT_PROFILE, SECTIONS, SensorProfile, get_profile
+from conesim.sim.sensors.timing import TIME_EPS, CaptureClock, SensorTiming
+from conesim.sim.sensors.truth import TruthSample
+from conesim.sim.sensors.validation import check_non_negative, check_positive, check_probability
+from conesim.sim.sensors.wheel_speed import WheelSpeedSensor
 
 SENSOR_ORDER = SECTIONS  # ("gps", "heading", "imu", "wheel_speed", "cones")
 DELIVERY_RANK = {"imu": 0, "wheel_speed": 1, "heading": 2, "gps": 3, "cones": 4}

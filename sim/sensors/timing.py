@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from sim.sensors.validation import check_non_negative, check_positive
+from conesim.sim.sensors.validation import check_non_negative, check_positive
 
 TIME_EPS = 1e-9  # [s] tolerance of the capture and delivery comparisons
 

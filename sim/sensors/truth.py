@@ -11,8 +11,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from localization.pose import Pose2D
-from sim.sensors.cone_map import ConeMap
+from conesim.core.pose import Pose2D
+from conesim.sim.sensors.cone_map import ConeMap
 
 
 def _no_cones() -> NDArray[np.float64]:

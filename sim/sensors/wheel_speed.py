@@ -12,11 +12,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from localization.messages import FRAME_GPS_ANTENNA, Header, WheelSpeed
-from sim.sensors.streams import stream
-from sim.sensors.timing import SensorTiming
-from sim.sensors.truth import TruthSample
-from sim.sensors.validation import check_non_negative
+from conesim.core.messages import FRAME_GPS_ANTENNA, Header, WheelSpeed
+from conesim.sim.sensors.streams import stream
+from conesim.sim.sensors.timing import SensorTiming
+from conesim.sim.sensors.truth import TruthSample
+from conesim.sim.sensors.validation import check_non_negative
 
 
 @dataclass(frozen=True)

@@ -27,16 +27,16 @@ from gymnasium.error import DependencyNotInstalled
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from envs import bag as bag_module
-from envs import runner
-from envs.bag import TOPICS, BagError, BagRecorder
-from envs.cli import main
-from envs.cone_track_env import ConeTrackEnv
-from envs.ros_messages import typestore
-from envs.runner import TIMING_FIELDS, RunResult, run_scenario
-from localization.geodesy import gps_to_local_cartesian
-from planner.autopilot import Autopilot
-from sim.sensors import get_profile
+from conesim.core.geodesy import gps_to_local_cartesian
+from conesim.envs import bag as bag_module
+from conesim.envs import runner
+from conesim.envs.bag import TOPICS, BagError, BagRecorder
+from conesim.envs.cli import main
+from conesim.envs.cone_track_env import ConeTrackEnv
+from conesim.envs.ros_messages import typestore
+from conesim.envs.runner import TIMING_FIELDS, RunResult, run_scenario
+from conesim.planner.autopilot import Autopilot
+from conesim.sim.sensors import get_profile
 
 DURATION = 3.0  # [s] simulated
 NS = 1_000_000_000
@@ -476,7 +476,7 @@ def test_results_that_cannot_be_written_take_only_what_the_bag_made(
     """When result.json and run.png cannot be written the bag goes too (half a run),
     but an empty directory the user made stays, and only the parents made for
     the bag are removed."""
-    from envs import cli
+    from conesim.envs import cli
 
     def cannot_write(*args: object) -> None:
         raise cli.CliError("--out: cannot write there (disk full)")

@@ -14,12 +14,12 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from envs import cli, runner
-from envs.cli import build_parser, format_result, main
-from envs.runner import RunResult
-from localization.geodesy import GeodesyError
-from localization.global_path import GlobalPath
-from tracks import Track, load_track
+from conesim.core.geodesy import GeodesyError
+from conesim.envs import cli, runner
+from conesim.envs.cli import build_parser, format_result, main
+from conesim.envs.runner import RunResult
+from conesim.tracks import Track, load_track
+from conesim.tracks.global_path import GlobalPath
 
 
 def run_cli(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:

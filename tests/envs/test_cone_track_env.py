@@ -10,11 +10,11 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 from numpy.testing import assert_allclose
 
-import envs
-from envs.autopilot_policy import AutopilotPolicy
-from envs.cone_track_env import ConeTrackEnv
-from envs.config import EnvConfig
-from planner import AutopilotConfig
+from conesim import envs
+from conesim.envs.autopilot_policy import AutopilotPolicy
+from conesim.envs.cone_track_env import ConeTrackEnv
+from conesim.envs.config import EnvConfig
+from conesim.planner import AutopilotConfig
 
 
 def test_registered_and_made_with_one_import() -> None:
@@ -356,7 +356,7 @@ def test_config_types_numpy_integers_yes_bools_and_strings_no() -> None:
     # Stored as plain Python values: a float32 rate would make the clock float32.
     assert type(cfg.laps) is int and type(cfg.control_rate) is float
     assert EnvConfig(rewards={"time": -0.5}).rewards.time == -0.5
-    from tracks import load_track
+    from conesim.tracks import load_track
 
     source = load_track("autocross").source
     assert source is not None

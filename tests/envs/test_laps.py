@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import pytest
 
-from envs.runner import run_scenario
-from tracks import shipped_tracks
+from conesim.envs.runner import run_scenario
+from conesim.tracks import shipped_tracks
 
 SEEDS = (0, 1, 2)
 

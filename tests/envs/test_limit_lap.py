@@ -7,10 +7,15 @@ import math
 import numpy as np
 from numpy.testing import assert_allclose
 
-from envs.limit_lap import _top_speed, centreline_curvature, limit_lap_time, qss_speed_profile
-from envs.runner import timed_limit_lap
-from sim.vehicle_params import VehicleParams
-from tracks import load_track
+from conesim.envs.limit_lap import (
+    _top_speed,
+    centreline_curvature,
+    limit_lap_time,
+    qss_speed_profile,
+)
+from conesim.envs.runner import timed_limit_lap
+from conesim.sim.vehicle_params import VehicleParams
+from conesim.tracks import load_track
 
 
 def circle(radius: float, n: int = 400) -> np.ndarray:

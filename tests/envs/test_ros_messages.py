@@ -7,8 +7,8 @@ import math
 import numpy as np
 from numpy.testing import assert_allclose
 
-from envs import ros_messages as rm
-from localization.messages import Header, HeadingStamped, Imu, WheelSpeed
+from conesim.core.messages import Header, HeadingStamped, Imu, WheelSpeed
+from conesim.envs import ros_messages as rm
 
 BIG = rm.UNMEASURED_VARIANCE
 

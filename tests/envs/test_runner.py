@@ -7,8 +7,8 @@ from typing import Any
 
 import pytest
 
-from envs import runner
-from envs.runner import TIMING_FIELDS, run_scenario
+from conesim.envs import runner
+from conesim.envs.runner import TIMING_FIELDS, run_scenario
 
 
 def test_env_options_may_not_repeat_run_scenario_arguments() -> None:

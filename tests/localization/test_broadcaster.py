@@ -7,11 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from localization.broadcaster import BroadcasterConfig, BroadcastMode, VehicleTfBroadcaster
-from localization.ekf import FusionEkf
-from localization.ekf.synthetic import fix_message
-from localization.frames import Buffer, TransformStamped
-from localization.messages import (
+from conesim.core.messages import (
     FRAME_GPS_ANTENNA,
     FRAME_REFERENCE,
     Header,
@@ -19,7 +15,11 @@ from localization.messages import (
     Imu,
     PointStamped,
 )
-from localization.pose import Pose2D
+from conesim.core.pose import Pose2D
+from conesim.localization.broadcaster import BroadcasterConfig, BroadcastMode, VehicleTfBroadcaster
+from conesim.localization.ekf import FusionEkf
+from conesim.localization.ekf.synthetic import fix_message
+from conesim.localization.frames import Buffer, TransformStamped
 
 
 def raw(buffer: Buffer) -> VehicleTfBroadcaster:

@@ -8,17 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from localization.ekf import (
-    EkfConfig,
-    FusionEkf,
-    NotInitialisedError,
-    RejectReason,
-    Sensor,
-    for_profile,
-)
-from localization.ekf.measurements import from_fix, from_heading
-from localization.ekf.synthetic import fix_message
-from localization.messages import (
+from conesim.core.messages import (
     FRAME_GPS_ANTENNA,
     FRAME_OS_SENSOR,
     FRAME_REFERENCE,
@@ -31,6 +21,16 @@ from localization.messages import (
     NavSatStatus,
     WheelSpeed,
 )
+from conesim.localization.ekf import (
+    EkfConfig,
+    FusionEkf,
+    NotInitialisedError,
+    RejectReason,
+    Sensor,
+    for_profile,
+)
+from conesim.localization.ekf.measurements import from_fix, from_heading
+from conesim.localization.ekf.synthetic import fix_message
 
 GPS_SIGMA = 1.0  # [m] wide, so that test measurements pass the gate
 
@@ -213,7 +213,7 @@ def test_bad_input_is_rejected_counted_logged_and_leaves_the_state_bit_identical
     """The reason is returned, counted and logged; state, covariance and time do not change."""
     ekf = started(EkfConfig(history_window=1.0), until=3.0)
     before, ahead = ekf.estimate(), ekf.estimate(3.5)
-    with caplog.at_level(logging.WARNING, logger="localization.ekf"):
+    with caplog.at_level(logging.WARNING, logger="conesim.localization.ekf"):
         result = ekf.process(msg)
     assert result is not None
     assert not result.accepted

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from localization.ekf import model as m
-from localization.ekf.model import ProcessModel, StateLayout
+from conesim.localization.ekf import model as m
+from conesim.localization.ekf.model import ProcessModel, StateLayout
 
 
 def test_motion_step_matches_the_model_for_any_interval() -> None:

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from localization.ekf import model as m
-from localization.ekf.filter import heading_residual
-from localization.ekf.model import ProcessModel, StateLayout
+from conesim.localization.ekf import model as m
+from conesim.localization.ekf.filter import heading_residual
+from conesim.localization.ekf.model import ProcessModel, StateLayout
 
 FloatArray = NDArray[np.float64]
 LAYOUTS = [

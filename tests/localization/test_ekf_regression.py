@@ -21,16 +21,16 @@ import math
 import numpy as np
 import pytest
 
-from localization.ekf import EkfConfig, FusionEkf, for_profile
-from localization.ekf import model as m
-from localization.ekf.history import order_key
-from localization.ekf.measurements import to_measurement
-from localization.ekf.model import ProcessModel, StateLayout
-from localization.messages import FRAME_GPS_ANTENNA, Header, Imu, Message
-from localization.pose import wrap_angle
-from sim.sensors import get_profile, override
-from sim.world import World, WorldConfig
-from tracks import load_track
+from conesim.core.messages import FRAME_GPS_ANTENNA, Header, Imu, Message
+from conesim.core.pose import wrap_angle
+from conesim.localization.ekf import EkfConfig, FusionEkf, for_profile
+from conesim.localization.ekf import model as m
+from conesim.localization.ekf.history import order_key
+from conesim.localization.ekf.measurements import to_measurement
+from conesim.localization.ekf.model import ProcessModel, StateLayout
+from conesim.sim.sensors import get_profile, override
+from conesim.sim.world import World, WorldConfig
+from conesim.tracks import load_track
 
 Tick = tuple[float, list[Message]]  # (world time after a physics step, messages delivered)
 

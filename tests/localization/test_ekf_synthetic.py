@@ -21,9 +21,9 @@ import pytest
 from numpy.typing import NDArray
 from scipy.stats import chi2
 
-from localization.ekf import EkfConfig, FusionEkf, RejectReason, Sensor
-from localization.ekf.synthetic import Path, SensorNoise, Truth, make_truth, messages
-from localization.messages import NavSatFix
+from conesim.core.messages import NavSatFix
+from conesim.localization.ekf import EkfConfig, FusionEkf, RejectReason, Sensor
+from conesim.localization.ekf.synthetic import Path, SensorNoise, Truth, make_truth, messages
 
 # The filter as the synthetic sensors need it: no model error beyond the IMU's
 # stated noise, biases drawn once per run from the filter's own priors.

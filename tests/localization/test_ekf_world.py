@@ -6,11 +6,11 @@ import math
 
 import numpy as np
 
-from localization.ekf import FusionEkf, RejectReason, for_profile
-from localization.messages import NavSatFix
-from sim.sensors import get_profile, override
-from sim.world import World, WorldConfig
-from tracks import load_track
+from conesim.core.messages import NavSatFix
+from conesim.localization.ekf import FusionEkf, RejectReason, for_profile
+from conesim.sim.sensors import get_profile, override
+from conesim.sim.world import World, WorldConfig
+from conesim.tracks import load_track
 
 
 def test_rtk_lap_start_tracks_the_truth() -> None:

@@ -17,7 +17,7 @@ from types import ModuleType
 
 import pytest
 
-from localization.ekf import for_profile
+from conesim.localization.ekf import for_profile
 
 RUNS = 8
 

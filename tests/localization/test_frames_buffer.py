@@ -10,8 +10,8 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy.spatial.transform import Rotation
 
-from localization.frames import LATEST, Buffer, ExtrapolationError, TransformStamped
-from localization.pose import Pose2D
+from conesim.core.pose import Pose2D
+from conesim.localization.frames import LATEST, Buffer, ExtrapolationError, TransformStamped
 
 IDENTITY_MATRIX = np.eye(4)
 
@@ -245,7 +245,7 @@ def test_old_data_is_dropped_with_a_warning(caplog: pytest.LogCaptureFixture) ->
     """Data older than newest - cache_time is not stored: False and a TF_OLD_DATA warning."""
     buffer = Buffer(cache_time=1.0)
     buffer.set_transform(TransformStamped.from_pose2d("reference", "car", 5.0, Pose2D(0, 0, 0)))
-    with caplog.at_level(logging.WARNING, logger="localization.frames.buffer"):
+    with caplog.at_level(logging.WARNING, logger="conesim.localization.frames.buffer"):
         stored = buffer.set_transform(
             TransformStamped.from_pose2d("reference", "car", 3.0, Pose2D(1, 0, 0))
         )

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from localization.frames import (
+from conesim.core.pose import Pose2D
+from conesim.localization.frames import (
     LATEST,
     Buffer,
     ConnectivityError,
@@ -22,7 +23,6 @@ from localization.frames import (
     InvalidArgumentError,
     TransformStamped,
 )
-from localization.pose import Pose2D
 
 SQRT2 = math.sqrt(2.0)
 

@@ -9,8 +9,8 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy.spatial.transform import Rotation, Slerp
 
-from localization.frames import ExtrapolationError, StaticCache, TimeCache, rigid
-from localization.frames.rigid import Rigid
+from conesim.localization.frames import ExtrapolationError, StaticCache, TimeCache, rigid
+from conesim.localization.frames.rigid import Rigid
 
 
 def item(x: float, yaw: float = 0.0) -> Rigid:

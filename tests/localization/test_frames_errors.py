@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from localization.frames import (
+from conesim.core.pose import Pose2D
+from conesim.localization.frames import (
     LATEST,
     Buffer,
     ConnectivityError,
@@ -21,7 +22,6 @@ from localization.frames import (
     TransformError,
     TransformStamped,
 )
-from localization.pose import Pose2D
 
 YAW_30 = (0.0, 0.0, math.sin(math.pi / 12), math.cos(math.pi / 12))
 

@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 from scipy.spatial.transform import Rotation, Slerp
 
-from localization.frames import TransformStamped, rigid
-from localization.pose import Pose2D
+from conesim.core.pose import Pose2D
+from conesim.localization.frames import TransformStamped, rigid
 
 IDENTITY_MATRIX = np.eye(4)
 

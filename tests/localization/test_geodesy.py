@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from localization.geodesy import (
+from conesim.core.geodesy import (
     DEFAULT_ORIGIN,
     R_EARTH,
     GeodesyError,

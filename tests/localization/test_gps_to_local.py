@@ -8,15 +8,15 @@ import math
 import numpy as np
 import pytest
 
-from localization.geodesy import DEFAULT_ORIGIN, ReferenceOrigin, local_cartesian_to_gps
-from localization.gps_to_local import GpsToLocalCartesian, gps_to_local_cartesian
-from localization.messages import (
+from conesim.core.geodesy import DEFAULT_ORIGIN, ReferenceOrigin, local_cartesian_to_gps
+from conesim.core.messages import (
     FRAME_GPS_ANTENNA,
     FRAME_REFERENCE,
     Header,
     NavSatFix,
     NavSatStatus,
 )
+from conesim.localization.gps_to_local import GpsToLocalCartesian, gps_to_local_cartesian
 
 R_EARTH = 6378137.0  # [m] the seed's constant
 
@@ -91,7 +91,7 @@ def test_node_converts_good_fixes() -> None:
 def test_one_fix_is_the_array_projection_bit_for_bit() -> None:
     """The node's float path for one fix gives geodesy's (numpy) projection exactly,
     near and far from several origins, at the range limits, with the sign of zero."""
-    from localization.geodesy import gps_to_local_cartesian as project
+    from conesim.core.geodesy import gps_to_local_cartesian as project
 
     rng = np.random.default_rng(3)
     origins = [DEFAULT_ORIGIN, ReferenceOrigin(-33.9, 151.2), ReferenceOrigin(0.0, 0.0)]

@@ -18,8 +18,8 @@ def test_library_warnings_stay_off_stderr_unless_configured() -> None:
         "import localization, tracks\n"
         "if sys.argv[1] == 'configured':\n"
         "    logging.basicConfig(level=logging.WARNING)\n"
-        "logging.getLogger('localization.ekf').warning('rejected gps message')\n"
-        "logging.getLogger('tracks.readers').warning('dropped a repeated cone')\n"
+        "logging.getLogger('conesim.localization.ekf').warning('rejected gps message')\n"
+        "logging.getLogger('conesim.tracks.readers').warning('dropped a repeated cone')\n"
     )
     quiet = _python(code, "library")
     assert quiet.returncode == 0 and quiet.stderr == ""

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from localization.messages import CONE_COLOURS, ConeDetections, Header
+from conesim.core.messages import CONE_COLOURS, ConeDetections, Header
 
 
 def test_cone_detections_take_the_colour_labels_of_cone_colours() -> None:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from localization.pose import Pose2D
+from conesim.core.pose import Pose2D
 
 
 def test_points_map_into_the_parent_frame_and_back() -> None:

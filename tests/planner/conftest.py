@@ -18,10 +18,10 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from localization.frames import Buffer, TransformStamped
-from localization.global_path import GlobalPath, global_path_from_centreline
-from localization.messages import ConeDetections, Header
-from localization.pose import Pose2D
+from conesim.core.messages import ConeDetections, Header
+from conesim.core.pose import Pose2D
+from conesim.localization.frames import Buffer, TransformStamped
+from conesim.tracks.global_path import GlobalPath, global_path_from_centreline
 
 FloatArray = NDArray[np.float64]
 SENSOR_Z = -0.1  # [m] os_sensor below gps_antenna (seed)

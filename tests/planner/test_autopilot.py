@@ -17,10 +17,10 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from localization.frames import Buffer
-from localization.messages import ConeDetections, Header, Message, WheelSpeed
-from localization.pose import Pose2D
-from planner import Autopilot, AutopilotConfig, ControlCommand, PlanStatus
+from conesim.core.messages import ConeDetections, Header, Message, WheelSpeed
+from conesim.core.pose import Pose2D
+from conesim.localization.frames import Buffer
+from conesim.planner import Autopilot, AutopilotConfig, ControlCommand, PlanStatus
 
 AXLE_TO_ANTENNA = 0.465  # [m] PurePursuitConfig.rear_axle_x = -0.465 in os_sensor
 WHEELBASE = 1.53  # [m]
@@ -349,7 +349,7 @@ def test_pursuit_continuation_takes_the_right_circle_at_a_figure_of_eight(
     the station window about the sensor's station picks the one ahead: at
     the end of A the global points go on round B (y < 0), at the end of B
     round A (y > 0)."""
-    from localization.global_path import global_path_from_centreline
+    from conesim.tracks.global_path import global_path_from_centreline
 
     radius = 9.125  # [m] the skidpad's centre line
     a = np.arange(0.0, 2.0 * math.pi, 0.01)

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from localization.global_path import global_path_from_centreline
-from localization.messages import ConeDetections, Header
-from localization.pose import Pose2D
-from planner import LEFT, RIGHT, ClassifierConfig, PathProjector, classify_cones_by_side
+from conesim.core.messages import ConeDetections, Header
+from conesim.core.pose import Pose2D
+from conesim.planner import LEFT, RIGHT, ClassifierConfig, PathProjector, classify_cones_by_side
+from conesim.tracks.global_path import global_path_from_centreline
 
 
 def nearest(points: np.ndarray, reference: np.ndarray) -> np.ndarray:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from planner import (
+from conesim.planner import (
     AutopilotConfig,
     ClassifierConfig,
     MidlineConfig,

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_array_equal
 
-from planner import MidlineConfig, SpeedProfileConfig, fused, kernels
-from planner.bridges import (
+from conesim.planner import MidlineConfig, SpeedProfileConfig, fused, kernels
+from conesim.planner.bridges import (
     ConeSet,
     boundary_edges,
     delaunay_edges,
@@ -19,10 +19,10 @@ from planner.bridges import (
     pair_table,
     virtual_partners,
 )
-from planner.geometry import arc_length
-from planner.midline import boundary_cones, bridges_and_midpoints, cones_with_partners
-from planner.ordering import ordered_midpoints
-from planner.speed_profile import profile_speeds, speed_profile
+from conesim.planner.geometry import arc_length
+from conesim.planner.midline import boundary_cones, bridges_and_midpoints, cones_with_partners
+from conesim.planner.ordering import ordered_midpoints
+from conesim.planner.speed_profile import profile_speeds, speed_profile
 from tests.planner.kernels.helpers import random_cones, ref_track
 
 

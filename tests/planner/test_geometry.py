@@ -7,13 +7,13 @@ import math
 import numpy as np
 from numpy.testing import assert_allclose
 
-from localization.global_path import global_path_from_centreline
-from planner.geometry import (
+from conesim.planner.geometry import (
     PathProjector,
     StationAxis,
     resample_polyline,
     segments_cross,
 )
+from conesim.tracks.global_path import global_path_from_centreline
 
 
 def brute_force(points: np.ndarray, xy: np.ndarray, closed: bool, allowed=None) -> np.ndarray:

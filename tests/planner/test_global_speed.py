@@ -7,10 +7,10 @@ import math
 import numpy as np
 from numpy.testing import assert_allclose
 
-from localization.global_path import global_path_from_centreline
-from planner.config import SpeedProfileConfig
-from planner.global_speed import GlobalSpeedPlan
-from planner.speed_profile import speed_profile
+from conesim.planner.config import SpeedProfileConfig
+from conesim.planner.global_speed import GlobalSpeedPlan
+from conesim.planner.speed_profile import speed_profile
+from conesim.tracks.global_path import global_path_from_centreline
 
 
 def test_circle_speed_is_sqrt_a_lat_r_everywhere() -> None:

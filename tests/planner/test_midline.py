@@ -15,10 +15,10 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy.interpolate import splev, splprep
 
-from localization.frames import Buffer
-from localization.messages import ConeDetections, Header
-from localization.pose import Pose2D
-from planner import (
+from conesim.core.messages import ConeDetections, Header
+from conesim.core.pose import Pose2D
+from conesim.localization.frames import Buffer
+from conesim.planner import (
     LEFT,
     RIGHT,
     ClassifiedCones,
@@ -29,8 +29,8 @@ from planner import (
     classify_cones_by_side,
     reference_path_planning,
 )
-from planner.geometry import resample_polyline
-from planner.spline import fit_path
+from conesim.planner.geometry import resample_polyline
+from conesim.planner.spline import fit_path
 
 
 def plan_scene(
@@ -322,15 +322,15 @@ def test_spline_path_lies_on_the_fitted_spline() -> None:
 
 def test_fitpack_flag_falls_back_to_straight_lines(monkeypatch: pytest.MonkeyPatch) -> None:
     """splprep reporting ier > 0 (a FITPACK warning) gives the polyline, as the seed."""
-    import planner.spline
+    import conesim.planner.spline
 
-    real = planner.spline.splprep
+    real = conesim.planner.spline.splprep
 
     def flagged(*args, **kwargs):  # type: ignore[no-untyped-def]
         tcku, fp, _, message = real(*args, **kwargs)
         return tcku, fp, 1, message
 
-    monkeypatch.setattr(planner.spline, "splprep", flagged)
+    monkeypatch.setattr(conesim.planner.spline, "splprep", flagged)
     x = np.linspace(0.0, 12.0, 7)
     mids = np.column_stack([x, 2.0 * np.sin(x / 4.0)])
     assert_allclose(fit_path(mids, MidlineConfig()), resample_polyline(mids, 0.5))

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from planner import PurePursuitConfig, lookahead_distance, pure_pursuit
-from planner.pure_pursuit import find_lookahead_point, pure_pursuit_angle, rear_slip_angle
+from conesim.planner import PurePursuitConfig, lookahead_distance, pure_pursuit
+from conesim.planner.pure_pursuit import find_lookahead_point, pure_pursuit_angle, rear_slip_angle
 
 CONFIG = PurePursuitConfig()  # L = 1.53 m, rear axle at x = -0.465 m in os_sensor
 # The geometry alone: no rear-axle slip (tested on its own below).

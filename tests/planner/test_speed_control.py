@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from planner import SpeedControlConfig, SpeedController, target_on_path
-from planner.speed_control import ellipse_limits
+from conesim.planner import SpeedControlConfig, SpeedController, target_on_path
+from conesim.planner.speed_control import ellipse_limits
 
 DT = 0.02  # [s] 50 Hz
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from planner import SpeedProfileConfig, speed_profile
-from planner.speed_profile import (
+from conesim.planner import SpeedProfileConfig, speed_profile
+from conesim.planner.speed_profile import (
     backward_pass,
     curvature_limit,
     ellipse_backward_pass,

@@ -15,23 +15,23 @@ from numpy.testing import assert_array_equal
 from scipy.interpolate import BSpline, splev, splprep
 from scipy.spatial import Delaunay
 
-from localization.frames import Buffer, TransformStamped
-from localization.global_path import global_path_from_centreline
-from localization.messages import Header
-from localization.pose import Pose2D
-from planner import MidlineConfig, kernels
-from planner.bridges import ConeSet, delaunay_edges, median
-from planner.classify import LEFT, RIGHT, ClassifiedCones, side_of_path
-from planner.geometry import (
+from conesim.core.messages import Header
+from conesim.core.pose import Pose2D
+from conesim.localization.frames import Buffer, TransformStamped
+from conesim.planner import MidlineConfig, kernels
+from conesim.planner.bridges import ConeSet, delaunay_edges, median
+from conesim.planner.classify import LEFT, RIGHT, ClassifiedCones, side_of_path
+from conesim.planner.geometry import (
     PathProjector,
     StationAxis,
     arc_length,
     polyline_crosses,
     segments_cross,
 )
-from planner.midline import check_path, cones_to_sensor
-from planner.ordering import chain_nearest
-from planner.speed_profile import menger_curvature, speed_profile
+from conesim.planner.midline import check_path, cones_to_sensor
+from conesim.planner.ordering import chain_nearest
+from conesim.planner.speed_profile import menger_curvature, speed_profile
+from conesim.tracks.global_path import global_path_from_centreline
 
 
 def loop_path(closed: bool = True) -> PathProjector:

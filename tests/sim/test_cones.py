@@ -7,7 +7,7 @@ import pymunk
 import pytest
 from numpy.testing import assert_allclose
 
-from sim.cones import COLLISION_CAR, ConeField, ConeParams, G
+from conesim.sim.cones import COLLISION_CAR, ConeField, ConeParams, G
 
 DT = 1.0 / 200.0
 

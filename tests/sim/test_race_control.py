@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from localization.pose import Pose2D
-from sim.progress import PolylineProgress, segment_crossing
-from sim.race_control import RaceControl, RaceRules
+from conesim.core.pose import Pose2D
+from conesim.sim.progress import PolylineProgress, segment_crossing
+from conesim.sim.race_control import RaceControl, RaceRules
 
 R = 20.0  # [m] centreline radius
 N = 400

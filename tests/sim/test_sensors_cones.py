@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from localization.messages import ConeDetections
-from localization.pose import Pose2D
-from sim.sensors.cone_detector import ConeDetector, ConeDetectorConfig
-from sim.sensors.cone_map import ConeMap
-from sim.sensors.profiles import get_profile
-from sim.sensors.truth import TruthSample
+from conesim.core.messages import ConeDetections
+from conesim.core.pose import Pose2D
+from conesim.sim.sensors.cone_detector import ConeDetector, ConeDetectorConfig
+from conesim.sim.sensors.cone_map import ConeMap
+from conesim.sim.sensors.profiles import get_profile
+from conesim.sim.sensors.truth import TruthSample
 
 KINDS = ("blue", "yellow", "orange", "big_orange", "unknown")
 # Geometry only: no noise, no misses, no false positives, no occlusion, perfect colour.

@@ -8,12 +8,12 @@ from dataclasses import replace
 import numpy as np
 from numpy.testing import assert_allclose
 
-from localization.geodesy import DEFAULT_ORIGIN, ReferenceOrigin, gps_to_local_cartesian
-from localization.messages import NavSatFix, NavSatStatus
-from localization.pose import Pose2D
-from sim.sensors.gps import GpsConfig, GpsReceiver
-from sim.sensors.profiles import get_profile
-from sim.sensors.truth import TruthSample
+from conesim.core.geodesy import DEFAULT_ORIGIN, ReferenceOrigin, gps_to_local_cartesian
+from conesim.core.messages import NavSatFix, NavSatStatus
+from conesim.core.pose import Pose2D
+from conesim.sim.sensors.gps import GpsConfig, GpsReceiver
+from conesim.sim.sensors.profiles import get_profile
+from conesim.sim.sensors.truth import TruthSample
 
 
 def fix_errors(config: GpsConfig, n: int, seed: int = 0) -> np.ndarray:

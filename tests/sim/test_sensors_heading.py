@@ -7,10 +7,10 @@ import math
 import numpy as np
 from numpy.testing import assert_allclose
 
-from localization.pose import Pose2D, wrap_angle
-from sim.sensors.heading import HeadingConfig, HeadingSensor
-from sim.sensors.profiles import get_profile
-from sim.sensors.truth import TruthSample
+from conesim.core.pose import Pose2D, wrap_angle
+from conesim.sim.sensors.heading import HeadingConfig, HeadingSensor
+from conesim.sim.sensors.profiles import get_profile
+from conesim.sim.sensors.truth import TruthSample
 
 
 def heading_errors(config: HeadingConfig, yaw: float, n: int) -> np.ndarray:

@@ -7,10 +7,10 @@ import math
 import numpy as np
 from numpy.testing import assert_allclose
 
-from localization.pose import Pose2D
-from sim.sensors.imu import ImuConfig, ImuSensor
-from sim.sensors.profiles import get_profile
-from sim.sensors.truth import TruthSample
+from conesim.core.pose import Pose2D
+from conesim.sim.sensors.imu import ImuConfig, ImuSensor
+from conesim.sim.sensors.profiles import get_profile
+from conesim.sim.sensors.truth import TruthSample
 
 G = 9.80665
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from sim.sensors.noise import BiasRandomWalk, GaussMarkov, white_sigma
-from sim.sensors.streams import stable_key, stream
+from conesim.sim.sensors.noise import BiasRandomWalk, GaussMarkov, white_sigma
+from conesim.sim.sensors.streams import stable_key, stream
 
 
 def test_white_sigma_is_density_over_sqrt_dt() -> None:

@@ -9,12 +9,12 @@ from typing import Any
 import pytest
 from numpy.testing import assert_allclose
 
-from sim.sensors.cone_detector import ConeDetectorConfig
-from sim.sensors.gps import GpsConfig
-from sim.sensors.heading import HeadingConfig
-from sim.sensors.imu import ImuConfig
-from sim.sensors.profiles import PROFILES, get_profile, override
-from sim.sensors.wheel_speed import WheelSpeedConfig
+from conesim.sim.sensors.cone_detector import ConeDetectorConfig
+from conesim.sim.sensors.gps import GpsConfig
+from conesim.sim.sensors.heading import HeadingConfig
+from conesim.sim.sensors.imu import ImuConfig
+from conesim.sim.sensors.profiles import PROFILES, get_profile, override
+from conesim.sim.sensors.wheel_speed import WheelSpeedConfig
 
 BAD_CONFIGS: list[tuple[type, dict[str, Any], str, str]] = [
     (GpsConfig, {"rate": 0.0}, "GpsConfig.rate", "(0, inf) [Hz]"),

@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from localization.messages import Imu, Message, NavSatFix, NavSatStatus
-from localization.pose import Pose2D
-from sim.sensors.profiles import get_profile, override
-from sim.sensors.suite import SensorSuite
-from sim.sensors.timing import CaptureClock
-from sim.sensors.truth import TruthSample
+from conesim.core.messages import Imu, Message, NavSatFix, NavSatStatus
+from conesim.core.pose import Pose2D
+from conesim.sim.sensors.profiles import get_profile, override
+from conesim.sim.sensors.suite import SensorSuite
+from conesim.sim.sensors.timing import CaptureClock
+from conesim.sim.sensors.truth import TruthSample
 
 ANGLES = np.linspace(0.0, 2 * math.pi, 150, endpoint=False)
 CONES = np.vstack([r * np.column_stack([np.cos(ANGLES), np.sin(ANGLES)]) for r in (28.0, 32.0)])

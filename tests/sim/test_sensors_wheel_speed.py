@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.testing import assert_allclose
 
-from localization.pose import Pose2D
-from sim.sensors.truth import TruthSample
-from sim.sensors.wheel_speed import WheelSpeedConfig, WheelSpeedSensor
+from conesim.core.pose import Pose2D
+from conesim.sim.sensors.truth import TruthSample
+from conesim.sim.sensors.wheel_speed import WheelSpeedConfig, WheelSpeedSensor
 
 
 def test_scale_error_is_fixed_per_episode_with_configured_spread() -> None:

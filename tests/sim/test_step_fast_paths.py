@@ -8,15 +8,15 @@ from dataclasses import astuple, fields
 import numpy as np
 import pytest
 
-from envs.observation import SensorMemory, build_observation
-from localization.messages import ConeDetections, Header
-from localization.pose import Pose2D
-from sim.progress import PolylineProgress
-from sim.sensors.profiles import get_profile
-from sim.sensors.suite import SensorSuite
-from sim.sensors.truth import TruthSample
-from sim.world import World, WorldConfig
-from tracks import load_track
+from conesim.core.messages import ConeDetections, Header
+from conesim.core.pose import Pose2D
+from conesim.envs.observation import SensorMemory, build_observation
+from conesim.sim.progress import PolylineProgress
+from conesim.sim.sensors.profiles import get_profile
+from conesim.sim.sensors.suite import SensorSuite
+from conesim.sim.sensors.truth import TruthSample
+from conesim.sim.world import World, WorldConfig
+from conesim.tracks import load_track
 
 
 def _wiggle(n: int, rng: np.random.Generator) -> np.ndarray:
@@ -113,8 +113,8 @@ def test_observation_cone_block_follows_the_detection() -> None:
 
 
 def test_gps_scalar_conversion_is_the_library_one() -> None:
-    from localization.geodesy import GeodesyError, local_cartesian_to_gps
-    from sim.sensors.gps import GpsReceiver
+    from conesim.core.geodesy import GeodesyError, local_cartesian_to_gps
+    from conesim.sim.sensors.gps import GpsReceiver
 
     gps = GpsReceiver(get_profile("rtk").gps, 0)
     rng = np.random.default_rng(7)

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 from scipy.optimize import minimize_scalar
 
-from sim.tyres import PacejkaParams, friction_ellipse, lateral_force, slip_angles
+from conesim.sim.tyres import PacejkaParams, friction_ellipse, lateral_force, slip_angles
 
 TYRE = PacejkaParams()
 FZ = 931.95  # [N] one axle of the default car: 190 kg * 9.81 / 2

@@ -16,10 +16,10 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy.optimize import brentq
 
-from localization.pose import Pose2D
-from sim.tyres import PacejkaParams
-from sim.vehicle import Vehicle, VehicleState, step
-from sim.vehicle_params import VehicleParams
+from conesim.core.pose import Pose2D
+from conesim.sim.tyres import PacejkaParams
+from conesim.sim.vehicle import Vehicle, VehicleState, step
+from conesim.sim.vehicle_params import VehicleParams
 
 DT = 1.0 / 200.0  # [s] default physics rate (ARCHITECTURE.md)
 NO_AERO = dataclasses.replace(VehicleParams(), lift_area=0.0)

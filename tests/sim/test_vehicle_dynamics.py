@@ -7,7 +7,7 @@ import math
 
 from numpy.testing import assert_allclose
 
-from sim.vehicle_dynamics import (
+from conesim.sim.vehicle_dynamics import (
     BodyVelocity,
     axle_loads,
     blend_weight,
@@ -16,7 +16,7 @@ from sim.vehicle_dynamics import (
     kinematic_wrench,
     longitudinal_forces,
 )
-from sim.vehicle_params import VehicleParams
+from conesim.sim.vehicle_params import VehicleParams
 
 P = VehicleParams()
 DT = 1.0 / 200.0

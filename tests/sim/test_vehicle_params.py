@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from sim.vehicle_params import VehicleParams
+from conesim.sim.vehicle_params import VehicleParams
 
 
 def test_defaults_are_the_fssim_car() -> None:

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from localization.geodesy import gps_to_local_cartesian
-from localization.messages import ConeDetections, Message, NavSatFix
-from localization.pose import Pose2D
-from sim.world import World, WorldConfig
-from tracks import load_track
+from conesim.core.geodesy import gps_to_local_cartesian
+from conesim.core.messages import ConeDetections, Message, NavSatFix
+from conesim.core.pose import Pose2D
+from conesim.sim.world import World, WorldConfig
+from conesim.tracks import load_track
 
 
 def flatten(messages: list[Message]) -> list[tuple[object, ...]]:

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import math
 
-from localization.messages import Imu, WheelSpeed
-from sim.world import World, WorldConfig
-from tracks import load_track
+from conesim.core.messages import Imu, WheelSpeed
+from conesim.sim.world import World, WorldConfig
+from conesim.tracks import load_track
 
 
 def test_ideal_gyro_integrates_to_the_true_heading_change() -> None:

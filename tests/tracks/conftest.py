@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from localization.pose import Pose2D
-from tracks import ConeKind, Layout, Track
+from conesim.core.pose import Pose2D
+from conesim.tracks import ConeKind, Layout, Track
 
 FloatArray = NDArray[np.float64]
 

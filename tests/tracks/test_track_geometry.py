@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from localization.pose import Pose2D
-from tracks import ConeKind, Layout, Track, derive_start_pose, detect_layout
-from tracks.geometry import build_geometry
+from conesim.core.pose import Pose2D
+from conesim.tracks import ConeKind, Layout, Track, derive_start_pose, detect_layout
+from conesim.tracks.geometry import build_geometry
 
 
 def test_circle_centreline_radius_and_width(circle) -> None:
@@ -134,7 +134,7 @@ def test_open_lane_with_braking_zone_and_two_timing_lines() -> None:
 def test_open_lane_without_a_finish_line_finishes_at_its_end() -> None:
     """Only the start's big orange cones: the finish is 1 m before the
     lane's end (x = 99 m on a lane to 100 m), and the validator says so."""
-    from tracks import check_report
+    from conesim.tracks import check_report
 
     cones, kinds = [], []
     for x in range(5, 101, 5):
@@ -231,7 +231,7 @@ def test_track_is_immutable(stadium) -> None:
 
 def test_bad_track_arguments_raise_track_format_error() -> None:
     """Shape, NaN, kinds and layout are checked at construction."""
-    from tracks import TrackFormatError
+    from conesim.tracks import TrackFormatError
 
     pose = Pose2D(0.0, 0.0, 0.0)
     with pytest.raises(TrackFormatError, match=r"\(n, 2\)"):

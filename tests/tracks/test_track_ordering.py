@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tracks.ordering import order_loop, order_path
+from conesim.tracks.ordering import order_loop, order_path
 
 
 def is_cyclic_order(tour: np.ndarray, n: int) -> bool:

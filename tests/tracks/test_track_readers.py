@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from localization.pose import Pose2D
-from tracks import (
+from conesim.core.pose import Pose2D
+from conesim.tracks import (
     ConeKind,
     Layout,
     TrackFileFormat,
@@ -463,8 +463,8 @@ def test_fssim_front_wing_wins_over_cg(tmp_path: Path) -> None:
 def test_fssim_front_wing_offset_is_the_default_vehicle_s() -> None:
     """The reader's CG-to-front-wing distance is the default car's (``tracks``
     cannot import ``sim``, so a test keeps the two equal)."""
-    from sim.vehicle_params import VehicleParams
-    from tracks.readers_yaml import FSSIM_CG_TO_FRONT_WING
+    from conesim.sim.vehicle_params import VehicleParams
+    from conesim.tracks.readers_yaml import FSSIM_CG_TO_FRONT_WING
 
     p = VehicleParams()
     assert p.cg_to_front + p.front_overhang == pytest.approx(FSSIM_CG_TO_FRONT_WING, abs=1e-12)
@@ -491,7 +491,7 @@ def test_exact_repeat_is_dropped_with_a_warning(
     path.write_text("\n".join([*lines, repeated]) + "\n")
     original = tmp_path / "original.csv"
     original.write_text(text)
-    with caplog.at_level("WARNING", logger="tracks.readers"):
+    with caplog.at_level("WARNING", logger="conesim.tracks.readers"):
         track = read_track(path)
     assert len(track.cones) == len(read_track(original).cones)
     assert f"repeat.csv:{len(lines) + 1}" in caplog.text and "dropped" in caplog.text

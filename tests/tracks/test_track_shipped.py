@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from localization.global_path import COV_THRESHOLD_M2, read_global_path_csv
-from tracks import DEFAULT_TRACK, ConeKind, Layout, check_report, load_track, shipped_tracks
-from tracks.polyline import project
+from conesim.tracks import DEFAULT_TRACK, ConeKind, Layout, check_report, load_track, shipped_tracks
+from conesim.tracks.global_path import COV_THRESHOLD_M2, read_global_path_csv
+from conesim.tracks.polyline import project
 
 ROOT = Path(__file__).resolve().parents[2]
 

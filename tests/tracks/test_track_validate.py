@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from localization.pose import Pose2D
-from tracks import ConeKind, Layout, Track, check_report, validate_track
-from tracks.polyline import segment_crossings
+from conesim.core.pose import Pose2D
+from conesim.tracks import ConeKind, Layout, Track, check_report, validate_track
+from conesim.tracks.polyline import segment_crossings
 
 
 def only(messages: list[str], fragment: str) -> str:

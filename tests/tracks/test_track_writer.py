@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 import yaml
 
-from localization.pose import Pose2D
-from tracks import ConeKind, Track, load_track, read_track, shipped_tracks, write_track
+from conesim.core.pose import Pose2D
+from conesim.tracks import ConeKind, Track, load_track, read_track, shipped_tracks, write_track
 
 
 @pytest.mark.parametrize("name", shipped_tracks())

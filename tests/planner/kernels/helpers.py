@@ -19,13 +19,13 @@ import math
 
 import numpy as np
 
-from localization.global_path import global_path_from_centreline
-from planner import MidlineConfig
-from planner.bridges import (
+from conesim.planner import MidlineConfig
+from conesim.planner.bridges import (
     ConeSet,
     TrackEstimate,
 )
-from planner.geometry import PathProjector, StationAxis, station_difference
+from conesim.planner.geometry import PathProjector, StationAxis, station_difference
+from conesim.tracks.global_path import global_path_from_centreline
 
 
 def ref_pairs(cones: ConeSet, config: MidlineConfig) -> tuple[np.ndarray, ...]:

@@ -8,8 +8,8 @@ import pytest
 from numpy.testing import assert_array_equal
 from scipy.spatial import Delaunay, QhullError
 
-from planner import MidlineConfig
-from planner.bridges import (
+from conesim.planner import MidlineConfig
+from conesim.planner.bridges import (
     ConeSet,
     TrackEstimate,
     boundary_edges,

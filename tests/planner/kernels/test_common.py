@@ -7,8 +7,8 @@ import math
 import numpy as np
 from numpy.testing import assert_array_equal
 
-from planner.geometry import station_difference
-from planner.kernels._common import wrapped_difference
+from conesim.planner.geometry import station_difference
+from conesim.planner.kernels._common import wrapped_difference
 
 
 def test_station_wrap_is_numpy_remainder() -> None:

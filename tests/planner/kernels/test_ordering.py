@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner import MidlineConfig
-from planner.geometry import StationAxis
-from planner.ordering import start_index
+from conesim.planner import MidlineConfig
+from conesim.planner.geometry import StationAxis
+from conesim.planner.ordering import start_index
 
 
 def test_start_index_is_the_masked_argmin() -> None:

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 from numpy.testing import assert_array_equal
 
-from planner import MidlineConfig
-from planner.midline import boundary_cones
+from conesim.planner import MidlineConfig
+from conesim.planner.midline import boundary_cones
 from tests.planner.kernels.helpers import loop_projector, random_cones
 
 REPO = Path(__file__).resolve().parents[3]  # the child processes import from here
@@ -62,13 +62,13 @@ def unwritable(self):
 caching._CacheLocator.ensure_cache_path = unwritable  # every locator fails
 with warnings.catch_warnings(record=True) as caught:
     warnings.simplefilter("always")
-    from planner import kernels
-    from localization.ekf import kernels as ekf_kernels
+    from conesim.planner import kernels
+    from conesim.localization.ekf import kernels as ekf_kernels
 import numpy as np
 owners = {str(w.message).split(":")[0] for w in caught if "no writable cache" in str(w.message)}
-modules = {f"planner.kernels.{m.name}" for m in pkgutil.iter_modules(kernels.__path__)}
+modules = {f"conesim.planner.kernels.{m.name}" for m in pkgutil.iter_modules(kernels.__path__)}
 assert len(modules) == 10, modules
-assert owners == modules | {"planner.fused", "localization.ekf.kernels"}, caught
+assert owners == modules | {"conesim.planner.fused", "conesim.localization.ekf.kernels"}, caught
 assert kernels.arc_length(np.array([[0.0, 0.0], [3.0, 4.0]])).tolist() == [0.0, 5.0]
 p = np.array([[1.0, 2.0], [4.0, 3.0]])
 assert ekf_kernels.symmetrised(p).tolist() == [[1.0, 3.0], [3.0, 3.0]]
@@ -86,15 +86,15 @@ def test_building_an_autopilot_loads_every_kernel_the_planning_step_calls() -> N
 import dataclasses, importlib, math, pkgutil
 import numpy as np
 from numba.core.registry import CPUDispatcher
-from localization.frames import Buffer, TransformStamped
-from localization.global_path import global_path_from_centreline
-from localization.messages import ConeDetections, Header
-from localization.pose import Pose2D
-from planner import AutopilotConfig, fused, kernels
-from planner.autopilot import Autopilot
-from planner.midline import PlanStatus
+from conesim.localization.frames import Buffer, TransformStamped
+from conesim.tracks.global_path import global_path_from_centreline
+from conesim.core.messages import ConeDetections, Header
+from conesim.core.pose import Pose2D
+from conesim.planner import AutopilotConfig, fused, kernels
+from conesim.planner.autopilot import Autopilot
+from conesim.planner.midline import PlanStatus
 
-modules = [fused] + [importlib.import_module(f"planner.kernels.{m.name}")
+modules = [fused] + [importlib.import_module(f"conesim.planner.kernels.{m.name}")
                      for m in pkgutil.iter_modules(kernels.__path__)]
 
 def loaded():

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_array_equal
 
-from planner.geometry import PathProjector
+from conesim.planner.geometry import PathProjector
 from tests.planner.kernels.helpers import loop_projector
 
 

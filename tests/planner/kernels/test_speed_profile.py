@@ -13,9 +13,9 @@ import math
 import numpy as np
 from numpy.testing import assert_array_equal
 
-from planner import SpeedProfileConfig
-from planner.geometry import arc_length
-from planner.speed_profile import (
+from conesim.planner import SpeedProfileConfig
+from conesim.planner.geometry import arc_length
+from conesim.planner.speed_profile import (
     _menger,
     backward_pass,
     curvature_limit,
@@ -195,8 +195,8 @@ def test_speed_profile_edge_cases_for_every_switch() -> None:
 def test_speed_profile_is_the_numpy_steps_on_the_global_paths() -> None:
     """Along each shipped track's global path, open and (closed) over three laps,
     as ``GlobalSpeedPlan`` profiles it, with the default limits."""
-    from localization.global_path import global_path_for_track
-    from tracks import load_track, shipped_tracks
+    from conesim.tracks import load_track, shipped_tracks
+    from conesim.tracks.global_path import global_path_for_track
 
     for name in shipped_tracks():
         path = global_path_for_track(load_track(name))

@@ -7,10 +7,10 @@ import numpy as np
 from numpy.testing import assert_array_equal
 from scipy.interpolate import BSpline, splev, splprep
 
-from planner import MidlineConfig
-from planner.geometry import arc_length
-from planner.kernels.spline import _spline_at
-from planner.spline import spline_through
+from conesim.planner import MidlineConfig
+from conesim.planner.geometry import arc_length
+from conesim.planner.kernels.spline import _spline_at
+from conesim.planner.spline import spline_through
 
 
 def ref_spline_through(points: np.ndarray, config: MidlineConfig) -> np.ndarray | None:

@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 from numpy.testing import assert_array_equal
 
-from planner import MidlineConfig
-from planner.bridges import (
+from conesim.planner import MidlineConfig
+from conesim.planner.bridges import (
     estimate_track,
     pair_table,
     virtual_partners,
 )
-from planner.midline import boundary_cones, in_view
+from conesim.planner.midline import boundary_cones, in_view
 from tests.planner.kernels.helpers import random_cones, ref_pairs, ref_track
 
 

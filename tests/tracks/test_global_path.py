@@ -12,8 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from localization.geodesy import DEFAULT_ORIGIN, local_cartesian_to_gps
-from localization.global_path import (
+from conesim.core.geodesy import DEFAULT_ORIGIN, local_cartesian_to_gps
+from conesim.tracks.global_path import (
     COV_THRESHOLD_M2,
     GlobalPath,
     GlobalPathError,
@@ -139,7 +139,7 @@ def test_findings_against_the_track() -> None:
     """trackdrive's own path fits it; moved 10 m (more than half its widest
     width plus 1 m) it is an error, the car would follow another line; one
     point 20 m off (a bad fix) is a warning naming it."""
-    from tracks import load_track
+    from conesim.tracks import load_track
 
     track = load_track("trackdrive")
     path = global_path_for_track(track)

@@ -20,14 +20,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
-from localization.geodesy import (
+from conesim.core.geodesy import (
     DEFAULT_ORIGIN,
     ReferenceOrigin,
     gps_to_local_cartesian,
     local_cartesian_to_gps,
 )
-from tracks import Track, TrackFormatError
-from tracks.polyline import resample
+from conesim.tracks.errors import TrackFormatError
+from conesim.tracks.model import Track
+from conesim.tracks.polyline import resample
 
 COV_THRESHOLD_M2 = 0.0025  # [m^2] seed: "error > threshold, e.g. >5 cm if threshold=0.0025"
 DERIVED_PATH_COV_M2 = 0.0004  # [m^2] a path surveyed from the cones: 2 cm sigma
