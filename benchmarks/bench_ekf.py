@@ -242,7 +242,7 @@ def world_ticks(profile: str, seed: int, faults: Faults) -> Iterator[Tick]:
     while travelled < geometry.length_m and world.time < 120.0:
         s = world.state
         world.set_command(*driver.command(s.x, s.y, s.yaw, s.vx))
-        msgs = world.step()
+        msgs = world.step().messages
         travelled += world.state.vx * world.dt
         yield world.time, world.state.antenna_pose(), msgs
 

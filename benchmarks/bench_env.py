@@ -62,7 +62,7 @@ def env_rate(sensors: str, localization: str = "fused") -> tuple[float, float, f
     # no sensors, no race control), then whole World steps (physics, race
     # control, sensors).
     env.reset(seed=0)
-    world = env.stack.world
+    world = env.loop.world
     vehicle, space, dt = world.vehicle, world.space, world.dt
     t0 = time.process_time()
     for steer, accel in commands:
@@ -73,7 +73,7 @@ def env_rate(sensors: str, localization: str = "fused") -> tuple[float, float, f
             vehicle.post_step()
     physics = time.process_time() - t0
     env.reset(seed=0)
-    world = env.stack.world
+    world = env.loop.world
     t0 = time.process_time()
     for steer, accel in commands:
         world.set_command(steer, accel)
@@ -149,7 +149,7 @@ def filterpy_floor() -> None:
     physics_per_step = phys / rate  # [s] bare physics per env step
     env = ConeTrackEnv(track="autocross")
     control_rate = env.config.control_rate
-    profile = env.stack.world_config.sensor_profile
+    profile = env.loop.world_config.sensor_profile
     least_calls = (
         profile.imu.rate + profile.heading.rate + profile.wheel_speed.rate + profile.gps.rate
     ) / control_rate

@@ -7,10 +7,10 @@ written with the pure-Python ``rosbags`` library (the ``ros`` extra), needs
 no ROS installation, and carries every message definition, the custom cone
 type's included.
 
-The recorder consumes what the loop produces anyway, once per control step:
-the stack's ``traffic`` (every measurement as delivered, every ``/local_xy``
-point, every broadcast ``reference -> gps_antenna`` transform), the
-autopilot's last plan and classification, and the world's truth. It steps
+The recorder consumes the closed loop's records (``envs.loop.StepRecord``),
+one per control step: every measurement as delivered, every ``/local_xy``
+point, every broadcast ``reference -> gps_antenna`` transform, the
+autopilot's plans with their classification, and the truth. It steps
 nothing and changes nothing, so a run with a bag is the run without one.
 
 Topics: type; frame (header.frame_id); rate with the rtk sensors.
@@ -48,9 +48,8 @@ measurement's capture time, the planner's transform stamp (the cone
 markers: the time of the transform the classifier used, the detection's
 stamp, or the latest transform's when the autopilot fell back to it), the
 truth's own time. The simulation starts at
-0, so the bag starts at the epoch. A plan is recorded when the autopilot's
-plan changed since the last control step: with cone detections slower than
-the control rate (10 vs 50 Hz by default) that is every plan.
+0, so the bag starts at the epoch. Every plan the autopilot made is recorded,
+at the control step that made it.
 
 Format: rosbag2 metadata version 8 (its QoS profiles are a YAML string, as
 Humble's rosbag2 reads them; version 9's list form is not read there),
@@ -96,8 +95,7 @@ if TYPE_CHECKING:
     from rosbags.interfaces import Connection, Qos
     from rosbags.rosbag2 import Writer
 
-    from conesim.envs.stack import VehicleStack
-    from conesim.planner.autopilot import Autopilot
+    from conesim.envs.loop import ClosedLoop, StepRecord
 
 BAG_VERSION: Final = 8  # rosbag2 metadata version (see the module docs)
 
@@ -244,8 +242,9 @@ class BagRecorder:
         self._connections: dict[str, Connection] = {}
         self._rm: ModuleType | None = None  # envs.ros_messages, once rosbags is known to be there
         self._traffic: dict[type, Routes] = {}
-        self._plan: object = None
-        self._cone_version = -1
+        self._frames = ("reference", "gps_antenna")  # (world, vehicle): start() sets them
+        self._kinds: tuple[str, ...] = ()
+        self._first = True
 
     # -- the directory -----------------------------------------------------------------------
 
@@ -344,58 +343,69 @@ class BagRecorder:
 
     # -- recording ---------------------------------------------------------------------------
 
-    def start(self, stack: VehicleStack, autopilot: Autopilot) -> None:
-        """The topics published once, then the t = 0 control step."""
-        rm = self._ros_messages()
-        frames = stack.broadcaster.config
-        self._write("/tf_static", 0.0, rm.tf_message([stack.broadcaster.static_transform]))
-        marker = rm.global_path_marker(stack.global_path, frames.reference_frame)
-        self._write("/global_path_marker", 0.0, marker)
-        self.record(stack, autopilot)
+    def start(self, loop: ClosedLoop) -> None:
+        """The topics published once (the static transform, the global path).
 
-    def record(self, stack: VehicleStack, autopilot: Autopilot) -> None:
-        """One control step: what localization passed on, a new plan, the truth."""
-        for t, item in stack.traffic:
+        Args:
+            loop: the loop to be recorded, after its reset.
+        """
+        rm = self._ros_messages()
+        broadcaster = loop.localizer.broadcaster
+        frames = broadcaster.config
+        self._frames = (frames.reference_frame, frames.antenna_frame)
+        self._kinds = tuple(str(k) for k in loop.track.kinds)
+        self._write("/tf_static", 0.0, rm.tf_message([broadcaster.static_transform]))
+        marker = rm.global_path_marker(loop.global_path, frames.reference_frame)
+        self._write("/global_path_marker", 0.0, marker)
+
+    def record(self, record: StepRecord) -> None:
+        """One control step: what localization passed on, the new plans, the truth."""
+        items: list[tuple[float, object]] = [(d.t, d.message) for d in record.deliveries]
+        items += [(d.t, d.message) for d in record.local_xy]
+        items += [(b.t, b.transform) for b in record.broadcasts]
+        items.sort(key=lambda item: item[0])  # stable: at one time, messages, points, transforms
+        for t, item in items:
             for topic, convert in self._traffic[type(item)]:
                 self._write(topic.name, t, convert(item))
-        now = stack.time
-        self._record_plan(now, autopilot)
-        self._record_truth(now, stack)
+        self._record_plans(record)
+        self._record_truth(record)
 
-    def _record_plan(self, t: float, autopilot: Autopilot) -> None:
+    def _record_plans(self, record: StepRecord) -> None:
         rm = self._ros_messages()
-        plan = autopilot.plan
-        if plan is None or plan is self._plan:
+        if record.driver is None:
             return
-        self._plan = plan
-        if autopilot.classified is not None:
-            left, right = autopilot.classified.markers()
+        t = record.t
+        for planned in record.driver.plans:
+            left, right = planned.classified.markers()
             self._write("/left_cone_marker", t, rm.cone_marker(left))
             self._write("/right_cone_marker", t, rm.cone_marker(right))
-        waypoints = plan.waypoints()
-        self._write("/local_planned_path", t, rm.local_path(plan.local_path()))
-        self._write("/final_waypoints", t, rm.waypoint_markers(waypoints))
-        self._write("/waypoint_speed_bars", t, rm.speed_bar_markers(waypoints))
-        self._write("/delaunay_internal_lines", t, rm.bridge_marker(plan.bridge_message()))
-        self._write("/delaunay_internal_midpoints", t, rm.midpoint_marker(plan.midpoint_message()))
+            plan = planned.plan
+            waypoints = plan.waypoints()
+            self._write("/local_planned_path", t, rm.local_path(plan.local_path()))
+            self._write("/final_waypoints", t, rm.waypoint_markers(waypoints))
+            self._write("/waypoint_speed_bars", t, rm.speed_bar_markers(waypoints))
+            self._write("/delaunay_internal_lines", t, rm.bridge_marker(plan.bridge_message()))
+            self._write(
+                "/delaunay_internal_midpoints", t, rm.midpoint_marker(plan.midpoint_message())
+            )
 
-    def _record_truth(self, t: float, stack: VehicleStack) -> None:
+    def _record_truth(self, record: StepRecord) -> None:
         rm = self._ros_messages()
-        world = stack.world
-        frames = stack.broadcaster.config
-        state = world.state
-        pose = world.antenna_pose
+        t = record.t
+        truth = record.truth
+        world_frame, vehicle_frame = self._frames
+        state = truth.state
+        pose = truth.antenna
         vx, vy = state.antenna_velocity()  # reference frame
         c, s = math.cos(pose.yaw), math.sin(pose.yaw)
         odom = rm.odometry(
-            t, frames.reference_frame, frames.antenna_frame,
+            t, world_frame, vehicle_frame,
             pose=pose, velocity=(c * vx + s * vy, c * vy - s * vx), yaw_rate=state.yaw_rate,
         )  # fmt: skip
         self._write("/ground_truth/odom", t, odom)
-        cones = world.cones
-        if cones.version != self._cone_version:
-            self._cone_version = cones.version
-            marker = rm.cone_truth_marker(t, frames.reference_frame, cones.positions, cones.kinds)
+        if truth.cones_moved or self._first:
+            self._first = False
+            marker = rm.cone_truth_marker(t, world_frame, truth.cones, self._kinds)
             self._write("/ground_truth/cones", t, marker)
 
     def _ros_messages(self) -> ModuleType:

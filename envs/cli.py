@@ -36,10 +36,10 @@ from typing import TYPE_CHECKING, TextIO
 from gymnasium.error import DependencyNotInstalled
 
 from conesim.core.geodesy import GeodesyError
-from conesim.envs.config import LOCALIZATION_MODES
 from conesim.envs.paths import missing_dirs, nearest_existing, os_reason, probe_writable
 from conesim.envs.run_plot import save_run_picture
 from conesim.envs.track_plot import save_track_picture
+from conesim.localization.modes import LOCALIZATION_MODES
 from conesim.sim.sensors import PROFILES as SENSOR_PROFILES
 from conesim.tracks import (
     DEFAULT_TRACK,

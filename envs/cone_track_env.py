@@ -1,10 +1,11 @@
 """``conesim/ConeTrack-v0``: drive a Formula Student cone track.
 
-The env hosts the closed loop (``envs.stack.VehicleStack``: the pymunk world,
-its sensors, the EKF and the frame tree). An action sets the car's steering
-and acceleration for one control period; the world runs its physics substeps
-and sensors; localization takes every message; the env observes, scores and
-decides whether the episode is over.
+The env wraps the closed loop (``envs.loop.ClosedLoop``: the pymunk world,
+its sensors, localization and the frame tree) without a driver: an action
+becomes the car's steering and acceleration command for one control period
+(``ClosedLoop.step``); the env observes, scores and passes on the loop's end
+of the episode. To drive it with the autopilot (a baseline, or an expert for
+imitation learning) use ``envs.expert.AutopilotExpert``.
 
 ## Action Space
 ``Box(-1, 1, (2,), float32)``: ``[steering, acceleration]``. Steering maps
@@ -37,11 +38,11 @@ Terminated when the requested laps are complete (an open lane such as
 acceleration is one run, whatever ``laps`` says), when the car leaves the
 track (``terminate_off_track``) or is stuck (``terminate_stuck``); truncated
 at the time limit (``time_limit``; default 60 s per lap + 30 s).
-``info["end_reason"]`` says which. The registered ``max_episode_steps`` is a
-backstop behind the env's own limit.
+``info["end_reason"]`` says which (``envs.loop.EndReason``). The registered
+``max_episode_steps`` is a backstop behind the env's own limit.
 
 ## Arguments
-``gymnasium.make("conesim/ConeTrack-v0", track="autocross", sensors="rtk",
+``gymnasium.make("conesim:conesim/ConeTrack-v0", track="autocross", sensors="rtk",
 localization="fused", laps=1, control_rate=50, observation="vector",
 render_mode="rgb_array", ...)``; every ``envs.config.EnvConfig`` field. Unknown
 keys raise, listing the allowed ones. ``reset(options=...)`` takes ``track``,
@@ -56,7 +57,6 @@ that episode only.
 
 from __future__ import annotations
 
-import contextlib
 import math
 from typing import Any, SupportsFloat
 
@@ -65,22 +65,29 @@ import numpy as np
 from numpy.typing import NDArray
 
 from conesim.core.geodesy import GeodesyError
-from conesim.core.messages import Message
 from conesim.core.pose import Pose2D
 from conesim.envs.config import EnvConfig
+from conesim.envs.loop import Broadcast, ClosedLoop, EpisodeRules, StepRecord, world_seed
 from conesim.envs.observation import SensorMemory, build_observation, observation_space
-from conesim.envs.render import Renderer, Scene
-from conesim.envs.stack import VehicleStack
-from conesim.localization.frames import LATEST, TransformError
+from conesim.envs.render import Renderer, Scene, SceneKeeper
+from conesim.planner.messages import ControlCommand
+from conesim.sim.events import RaceStanding
 from conesim.sim.world import WorldConfig
 from conesim.tracks import Track, load_track
 
 ObsType = NDArray[np.float32] | dict[str, NDArray[np.float32]]
 RESET_OPTIONS = ("track", "sensors", "localization", "start_pose")
+REWARD_TERMS = ("progress", "time", "cone_hit", "cone_doo", "off_track", "lap")
 
 
 class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
-    """A car on a cone track with noisy sensors and EKF localization (see the module docs)."""
+    """A car on a cone track with noisy sensors and EKF localization (see the module docs).
+
+    Attributes:
+        loop: the closed loop of the current episode (public: its ``record``,
+            ``localizer.frames`` and ``global_path`` serve a driver such as
+            ``AutopilotExpert``).
+    """
 
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 20}  # noqa: RUF012
 
@@ -96,15 +103,14 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
         self.observation_space = observation_space(self.config.max_cones, self.config.observation)
         self._track_cache: dict[str, Track] = {}
-        self.stack = self._build_stack(
-            0, self.config.track, self.config.sensors, self.config.localization
-        )
-        self.overlay: Any = None  # an object with planner intermediates, for drawing
+        cfg = self.config
+        self.loop = self._build_loop(cfg.track, cfg.sensors, cfg.localization)
+        self._record: StepRecord | None = None  # the last step's; None before reset
         self._renderer: Renderer | None = None
+        self._scenes = self._scene_keeper()
         self._action = np.zeros(2, dtype=np.float32)
         self._memory = SensorMemory()
-        self.last_messages: list[Message] = []
-        self._counts: dict[str, float] | None = None  # score at the last step; None before reset
+        self._broadcast: Broadcast | None = None
 
     # -- gymnasium API -----------------------------------------------------------------------
 
@@ -127,19 +133,18 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
             sensors=options.get("sensors", cfg.sensors),
             localization=options.get("localization", cfg.localization),
         )
-        track, sensors, localization = chosen.track, chosen.sensors, chosen.localization
         start_pose = _start_pose_option(options.get("start_pose"))
         # A refused reset leaves the env as it was, its random generator included.
         rng, rng_seed = self._np_random, self._np_random_seed
         rng_state = None if rng is None else rng.bit_generator.state
         super().reset(seed=seed)
         try:
-            episode_seed = int(self.np_random.integers(0, 2**31 - 1))
-            stack = self._build_stack(episode_seed, track, sensors, localization, start_pose)
-            if start_pose is not None and stack.world.race.is_off_track_at(start_pose):
+            loop = self._build_loop(chosen.track, chosen.sensors, chosen.localization)
+            record = loop.reset(world_seed(self.np_random), start_pose)
+            if start_pose is not None and loop.world.race.is_off_track_at(start_pose):
                 raise ValueError(
                     f"reset option start_pose {options['start_pose']!r} puts the car off the "
-                    f"track {stack.track.name!r}"
+                    f"track {loop.track.name!r}"
                 )
         except Exception as exc:
             self._np_random, self._np_random_seed = rng, rng_seed
@@ -149,25 +154,25 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
                 pose = options["start_pose"]
                 raise ValueError(f"reset option start_pose {pose!r}: {exc}") from None
             raise
-        self.stack = stack
-        self.overlay = None  # a policy attaches its own after reset
-        if self._renderer is not None:
-            self._renderer.global_path = self.stack.global_path
+        self.loop = loop
         self._action = np.zeros(2, dtype=np.float32)
         self._memory = SensorMemory()
-        self._memory.update(self.stack.initial_messages)
-        self.last_messages = list(self.stack.initial_messages)
-        self._counts = self._score_counts()
+        self._broadcast = None
+        self._scenes = self._scene_keeper()
+        if self._renderer is not None:
+            self._renderer.global_path = loop.global_path
+        self._take(record)
         if self.render_mode == "human":
             self.render()
-        return self._observe(), self._info(dict.fromkeys(self._reward_weights(), 0.0), "")
+        return self._observe(), self._info(dict.fromkeys(REWARD_TERMS, 0.0))
 
     def step(
         self, action: NDArray[np.float32]
     ) -> tuple[ObsType, SupportsFloat, bool, bool, dict[str, Any]]:
         """Apply an action for one control period (``physics_rate / control_rate`` steps)."""
         # 1. act
-        if self._counts is None:
+        last = self._record
+        if last is None:
             raise gym.error.ResetNeeded("call reset() before step()")
         act = np.asarray(action, dtype=np.float32)
         if act.shape != (2,):
@@ -179,18 +184,19 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
             raise ValueError(f"action must be finite, got {action!r}")
         self._action = np.minimum(np.maximum(act, -1.0), 1.0)  # np.clip without its wrapper
         steer, accel = self.action_to_command(self._action)
-        self.stack.world.set_command(steer, accel)
-        # 2. simulate
-        self.last_messages = self.stack.run_physics_steps(self.config.substeps)
-        self._memory.update(self.last_messages)
+        # 2. simulate: the closed loop, with the action as its command
+        record = self.loop.step(ControlCommand(last.t, steer, accel))
+        self._take(record)
         # 3. observe
         obs = self._observe()
         # 4. reward terms
-        terms = self._reward_terms()
+        terms = self._reward_terms(last, record)
         reward = float(sum(terms.values()))
         # 5. terminated / truncated
-        terminated, truncated, reason = self._episode_end()
-        info = self._info(terms, reason)
+        end = record.end
+        terminated = end is not None and not end.truncated
+        truncated = end is not None and end.truncated
+        info = self._info(terms)
         if self.render_mode == "human":
             self.render()
         return obs, reward, terminated, truncated, info
@@ -201,7 +207,7 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
             gym.logger.warn("render() called without a render_mode; pass render_mode to make()")
             return None
         if self._renderer is None:
-            self._renderer = Renderer(self.stack.global_path)
+            self._renderer = Renderer(self.loop.global_path)
         frame = self._renderer.rgb_array(self.scene())
         if self.render_mode == "human":
             self._renderer.show(frame, self.metadata["render_fps"])
@@ -218,33 +224,48 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
 
     def action_to_command(self, action: NDArray[np.float32]) -> tuple[float, float]:
         """Map an action in [-1, 1]^2 to (steering [rad], acceleration [m/s^2])."""
-        p = self.stack.world_config.vehicle
+        p = self.loop.world_config.vehicle
         a = float(action[1])
         return float(action[0]) * p.max_steer, a * (p.max_accel if a >= 0 else p.max_decel)
 
     def command_to_action(self, steer: float, accel: float) -> NDArray[np.float32]:
         """Inverse of :meth:`action_to_command`, clipped to the action space."""
-        p = self.stack.world_config.vehicle
+        p = self.loop.world_config.vehicle
         a = accel / p.max_accel if accel >= 0 else accel / p.max_decel
         return np.clip(np.array([steer / p.max_steer, a], dtype=np.float32), -1.0, 1.0)
 
-    def _build_stack(
-        self,
-        seed: int,
-        track_name: str,
-        sensors: str,
-        localization: str,
-        start_pose: Pose2D | None = None,
-    ) -> VehicleStack:
-        if track_name not in self._track_cache:
-            self._track_cache[track_name] = load_track(track_name)
-        world_config = WorldConfig(physics_rate=self.config.physics_rate, sensors=sensors)
-        return VehicleStack(
-            self._track_cache[track_name], world_config, localization, seed, start_pose
+    def _build_loop(self, track_name: str, sensors: str, localization: str) -> ClosedLoop:
+        """A loop for one episode with these settings, the env's rates and rules."""
+        cfg = self.config
+        return ClosedLoop(
+            self._track(track_name),
+            WorldConfig(physics_rate=cfg.physics_rate, sensors=sensors),
+            localization=localization,
+            control_rate=cfg.control_rate,
+            rules=EpisodeRules(
+                laps=cfg.laps,
+                time_limit=cfg.time_limit,
+                end_on_off_track=cfg.terminate_off_track,
+                end_on_stuck=cfg.terminate_stuck,
+            ),
         )
 
+    def _track(self, name: str) -> Track:
+        if name not in self._track_cache:
+            self._track_cache[name] = load_track(name)
+        return self._track_cache[name]
+
+    def _take(self, record: StepRecord) -> None:
+        """Keep what the observation, the info and the picture need from a record."""
+        self._record = record
+        self._memory.update(record.messages)
+        if record.broadcasts:
+            self._broadcast = record.broadcasts[-1]
+        self._scenes.update(record)
+
     def _observe(self) -> ObsType:
-        estimate = self.stack.estimate()
+        loop = self.loop
+        estimate = loop.localizer.estimate(loop.time)
         dict_pose = self.config.observation == "dict" and estimate is None
         return build_observation(
             self._memory,
@@ -252,27 +273,15 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
             self._action,
             self.config.max_cones,
             self.config.observation,
-            published=self.stack.published_pose() if dict_pose else None,
-            awaiting_estimate=estimate is None and self.stack.localization == "fused",
-            now=self.stack.world.time,
+            published=loop.localizer.published_pose() if dict_pose else None,
+            awaiting_estimate=estimate is None and loop.localization == "fused",
+            now=loop.time,
         )
 
-    def _score_counts(self) -> dict[str, float]:
-        world = self.stack.world
-        race = world.race_state
-        return {
-            "progress": race.progress_m,
-            "time": world.time,
-            "cone_hit": float(len(world.cones.hit_ids)),
-            "cone_doo": float(len(world.cones.doo_ids)),
-            "off_track": float(len(race.off_track)),
-            "lap": float(race.laps_completed),
-        }
-
-    def _reward_weights(self) -> dict[str, float]:
-        """Each reward term's weight, by name (the keys of ``info["reward_terms"]``)."""
+    def _reward_terms(self, last: StepRecord, now: StepRecord) -> dict[str, float]:
+        """Each weighted term of the step's reward, from the two records' standings."""
         w = self.config.rewards
-        return {
+        weights = {
             "progress": w.progress,
             "time": w.time,
             "cone_hit": w.cone_hit,
@@ -280,51 +289,31 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
             "off_track": w.off_track,
             "lap": w.lap,
         }
-
-    def _reward_terms(self) -> dict[str, float]:
-        counts = self._score_counts()
-        weights = self._reward_weights()
-        last = self._counts
-        assert last is not None  # step() checks that reset() came first
+        before, after = _counts(last), _counts(now)
         # + 0.0: a term with nothing to count is 0.0, not -0.0 (a negative weight times 0)
-        terms = {k: weights[k] * (counts[k] - last[k]) + 0.0 for k in weights}
-        self._counts = counts
-        return terms
-
-    def _episode_end(self) -> tuple[bool, bool, str]:
-        world = self.stack.world
-        race = world.race_state
-        cfg = self.config
-        if race.laps_completed >= self.laps_to_drive:
-            return True, False, "laps_completed"
-        if cfg.terminate_off_track and race.off_track:
-            return True, False, "off_track"
-        if cfg.terminate_stuck and race.stuck:
-            return True, False, "stuck"
-        if world.time >= cfg.episode_time_limit - 1e-9:
-            return False, True, "time_limit"
-        return False, False, ""
+        return {k: weights[k] * (after[k] - before[k]) + 0.0 for k in REWARD_TERMS}
 
     @property
     def laps_to_drive(self) -> int:
         """Laps that end the episode: ``laps``, or 1 on an open lane (one run)."""
-        return 1 if self.stack.track.layout == "open" else self.config.laps
+        return self.loop.laps_to_drive
 
-    def _info(self, terms: dict[str, float], reason: str) -> dict[str, Any]:
-        world = self.stack.world
-        race = world.race_state
-        state = world.state
-        antenna = state.antenna_pose()
+    def _info(self, terms: dict[str, float]) -> dict[str, Any]:
+        record = self._record
+        assert record is not None
+        race = record.truth.race
+        state = record.truth.state
+        antenna = record.truth.antenna
         info: dict[str, Any] = {
-            "t": world.time,
+            "t": record.t,
             "reward_terms": terms,
-            "end_reason": reason,
+            "end_reason": "" if record.end is None else str(record.end),
             "laps_completed": race.laps_completed,
             "lap_times": list(race.lap_times),
             "progress_m": race.progress_m,
-            "cones_hit": len(world.cones.hit_ids),
-            "cones_down_or_out": len(world.cones.doo_ids),
-            "off_track_events": len(race.off_track),
+            "cones_hit": race.cones_hit,
+            "cones_down_or_out": race.cones_down_or_out,
+            "off_track_events": race.off_track_events,
             "truth": {
                 "x": antenna.x,
                 "y": antenna.y,
@@ -332,60 +321,42 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
                 "speed": state.speed,
                 "steer": state.steer,
             },
-            "messages": self.last_messages,
+            "messages": record.messages,
         }
-        samples = self.stack.localization_samples
+        last = self._broadcast
         # Always a dict, inf (no pose yet) before the first broadcast: gymnasium's
         # vector envs stack each info key across sub-envs and need one type per
         # key, and its checker compares infos with == (NaN != NaN).
         info["localization_error"] = (
-            {"position_m": samples[-1].position_error, "yaw_rad": samples[-1].yaw_error}
-            if samples
+            {"position_m": last.position_error, "yaw_rad": last.yaw_error}
+            if last is not None
             else {"position_m": math.inf, "yaw_rad": math.inf}
         )
         return info
 
+    def _scene_keeper(self) -> SceneKeeper:
+        p = self.loop.world_config.vehicle
+        return SceneKeeper(tuple(str(k) for k in self.loop.track.kinds), p.length, p.width)
+
     def scene(self) -> Scene:
-        """What a frame shows now (truth, estimate, detections, planner overlay)."""
-        world = self.stack.world
-        p = world.config.vehicle
-        est = self.stack.estimate()
-        scene = Scene(
-            cones=np.asarray(world.cones.positions),
-            kinds=world.cones.kinds,
-            car=world.state.pose,
-            car_length=p.length,
-            car_width=p.width,
-            t=world.time,
-            speed=world.state.speed,
-            laps=world.race_state.laps_completed,
-        )
-        if est is not None:
-            scene.estimate = est.pose
-            scene.covariance = np.asarray(est.pose_covariance)[:2, :2]
-        det = self._memory.detections
-        buffer = self.stack.buffer
-        if det is not None and len(det):
-            with contextlib.suppress(TransformError):  # placed with the pose at capture
-                scene.detections = buffer.transform_points(
-                    "reference", "os_sensor", np.asarray(det.points[:, :2]), det.header.stamp
-                )
-        ap = self.overlay
-        if ap is not None:
-            scene.left = np.asarray(ap.left_cones)
-            scene.right = np.asarray(ap.right_cones)
-            path_ref = np.asarray(getattr(ap, "path_reference", np.zeros((0, 2))))
-            scene.path = path_ref
-            plan = getattr(ap, "plan", None)
-            if plan is not None and len(plan.speeds) == len(path_ref):
-                scene.speeds = np.asarray(plan.speeds)
-            look = ap.lookahead_point
-            if look is not None:
-                with contextlib.suppress(TransformError):
-                    scene.lookahead = buffer.transform_points(
-                        "reference", "os_sensor", np.asarray(look).reshape(1, 2), LATEST
-                    )[0]
-        return scene
+        """What a frame shows now (truth, estimate, detections)."""
+        if self._record is None:
+            raise gym.error.ResetNeeded("call reset() before render()")
+        loop = self.loop
+        return self._scenes.scene(loop.localizer.frames, loop.localizer.estimate(loop.time))
+
+
+def _counts(record: StepRecord) -> dict[str, float]:
+    """What the reward terms count, after a step."""
+    race: RaceStanding = record.truth.race
+    return {
+        "progress": race.progress_m,
+        "time": record.t,
+        "cone_hit": float(race.cones_hit),
+        "cone_doo": float(race.cones_down_or_out),
+        "off_track": float(race.off_track_events),
+        "lap": float(race.laps_completed),
+    }
 
 
 def _start_pose_option(value: Any) -> Pose2D | None:

@@ -14,11 +14,9 @@ from typing import Any
 
 import numpy as np
 
+from conesim.localization.modes import LOCALIZATION_MODES
 from conesim.sim.sensors import PROFILES as SENSOR_PROFILES
 from conesim.tracks import DEFAULT_TRACK
-
-LOCALIZATION_MODES = ("fused", "raw", "truth")
-"""Where the frame tree's ``reference -> gps_antenna`` comes from (``envs.stack``)."""
 
 OBSERVATION_MODES = ("vector", "dict")
 

@@ -13,6 +13,7 @@ planned path, the waypoints with speed bars and the lookahead point.
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -24,8 +25,13 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse, Polygon
 from numpy.typing import NDArray
 
+from conesim.core.messages import FRAME_OS_SENSOR, FRAME_REFERENCE, ConeDetections
 from conesim.core.pose import Pose2D
+from conesim.envs.loop import StepRecord
 from conesim.envs.track_plot import CONE_STYLE, draw_global_path
+from conesim.localization.ekf import Estimate
+from conesim.localization.frames import LATEST, Buffer, TransformError
+from conesim.planner.autopilot import Planned
 from conesim.tracks import ConeKind
 from conesim.tracks.global_path import GlobalPath
 
@@ -56,6 +62,79 @@ class Scene:
     path: FloatArray = field(default_factory=_empty)
     speeds: FloatArray = field(default_factory=lambda: np.zeros(0))
     lookahead: FloatArray | None = None
+
+
+class SceneKeeper:
+    """Builds each frame's :class:`Scene` from the loop's records.
+
+    Keeps, between records, the newest cone detection and the driver's newest
+    plan (detections come at 10 Hz, plans with them; frames at the control
+    rate).
+
+    Args:
+        kinds: the track's cone kinds, in cone order.
+        car_length: the car's footprint length [m].
+        car_width: its width [m].
+    """
+
+    def __init__(self, kinds: tuple[str, ...], car_length: float, car_width: float) -> None:
+        self.kinds = kinds
+        self.car_length = car_length
+        self.car_width = car_width
+        self.detections: ConeDetections | None = None
+        self.planned: Planned | None = None
+        self.record: StepRecord | None = None
+
+    def update(self, record: StepRecord) -> None:
+        """Take a record (every one, in order)."""
+        for delivery in record.deliveries:
+            if isinstance(delivery.message, ConeDetections):
+                self.detections = delivery.message
+        if record.driver is not None and record.driver.plans:
+            self.planned = record.driver.plans[-1]
+        self.record = record
+
+    def scene(self, frames: Buffer, estimate: Estimate | None) -> Scene:
+        """The scene of the last record: truth, ``estimate``, detections placed by ``frames``."""
+        record = self.record
+        assert record is not None, "SceneKeeper.scene() before update()"
+        truth = record.truth
+        scene = Scene(
+            cones=truth.cones,
+            kinds=self.kinds,
+            car=truth.state.pose,
+            car_length=self.car_length,
+            car_width=self.car_width,
+            t=record.t,
+            speed=truth.state.speed,
+            laps=truth.race.laps_completed,
+        )
+        if estimate is not None:
+            scene.estimate = estimate.pose
+            scene.covariance = np.asarray(estimate.pose_covariance)[:2, :2]
+        det = self.detections
+        if det is not None and len(det):
+            with contextlib.suppress(TransformError):  # placed with the pose at capture
+                scene.detections = frames.transform_points(
+                    FRAME_REFERENCE,
+                    FRAME_OS_SENSOR,
+                    np.asarray(det.points[:, :2]),
+                    det.header.stamp,
+                )
+        out = record.driver
+        if self.planned is not None and out is not None:
+            scene.left = np.asarray(self.planned.classified.left)
+            scene.right = np.asarray(self.planned.classified.right)
+            scene.path = np.asarray(out.path_reference)
+            if len(self.planned.plan.speeds) == len(scene.path):
+                scene.speeds = np.asarray(self.planned.plan.speeds)
+            if out.lookahead is not None:
+                with contextlib.suppress(TransformError):
+                    scene.lookahead = frames.transform_points(
+                        FRAME_REFERENCE, FRAME_OS_SENSOR, np.asarray(out.lookahead).reshape(1, 2),
+                        LATEST,
+                    )[0]  # fmt: skip
+        return scene
 
 
 class Renderer:

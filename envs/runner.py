@@ -1,15 +1,15 @@
-"""Headless scenario runs: the env, driven by the autopilot, measured.
+"""Headless scenario runs: the closed loop, driven by the autopilot, measured.
 
 ``run_scenario`` is what ``conesim run``, the lap-completion tests and the
-benchmarks call: one episode of ``ConeTrack-v0`` with the ``AutopilotPolicy``,
-recording what the result needs (trajectory, localization error at every
-broadcast, the planner's midline error, speeds) and returning a
-``RunResult`` whose ``to_json()`` is ``result.json``.
+benchmarks call: one episode of the closed loop (``envs.loop.ClosedLoop``)
+with the autopilot as its driver. Every step's record goes to the metrics
+(``envs.metrics``), and to the bag recorder and the window when asked for;
+the result, a ``RunResult``, is ``result.json`` (``to_json()``).
 """
 
 from __future__ import annotations
 
-import math
+import functools
 import os
 import time
 from collections.abc import Callable, Iterator
@@ -18,33 +18,19 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from conesim.core.geodesy import GeodesyError
-from conesim.envs.autopilot_policy import AutopilotPolicy
 from conesim.envs.bag import BagRecorder
-from conesim.envs.cone_track_env import ConeTrackEnv
 from conesim.envs.limit_lap import limit_lap_time
+from conesim.envs.loop import ClosedLoop, EpisodeRules, StepRecord, world_seed
+from conesim.envs.metrics import RunMetrics, RunTrace
+from conesim.envs.render import Renderer, SceneKeeper
+from conesim.planner import Autopilot, AutopilotConfig
+from conesim.planner.autopilot import CONTROL_RATE, default_config
 from conesim.sim.progress import PolylineProgress
 from conesim.sim.race_control import line_crossings_along
+from conesim.sim.world import WorldConfig
 from conesim.tracks import Track, TrackFormatError, load_track
-
-MIDLINE_SAMPLE_M = 0.05  # [m] spacing of the densified true centreline
-
-
-@dataclass
-class RunTrace:
-    """Per control step samples for the run picture."""
-
-    t: list[float] = field(default_factory=list)
-    x: list[float] = field(default_factory=list)
-    y: list[float] = field(default_factory=list)
-    speed: list[float] = field(default_factory=list)
-    target_speed: list[float] = field(default_factory=list)
-    loc_t: list[float] = field(default_factory=list)
-    loc_pos_err: list[float] = field(default_factory=list)
-    loc_yaw_err: list[float] = field(default_factory=list)
-
 
 TIMING_FIELDS = ("wall_time_s", "real_time_factor", "setup_time_s")
 """The fields of ``result.json`` that depend on the machine, not on the run:
@@ -124,47 +110,38 @@ def run_scenario(
     localization: str = "fused",
     render: bool = False,
     progress: Callable[[float, float], None] | None = None,
-    env_options: dict[str, Any] | None = None,
     bag: str | os.PathLike[str] | None = None,
+    autopilot: AutopilotConfig | None = None,
+    time_limit: float | None = None,
+    control_rate: float = CONTROL_RATE,
+    physics_rate: float = 200.0,
 ) -> RunResult:
     """Run one episode with the autopilot.
 
     Args:
         track: shipped track name or a track file.
         laps: laps to drive.
-        seed: episode seed.
+        seed: episode seed (the same episode as ``env.reset(seed=seed)``).
         sensors: sensor profile.
         localization: ``fused``, ``raw`` or ``truth``.
         render: show a window (the ``render`` extra).
         progress: called as ``progress(sim_time, time_limit)`` every control step.
-        env_options: further ``EnvConfig`` fields (not the ones named above).
         bag: record the run into a new rosbag2 directory there (``envs.bag``;
             the ``ros`` extra). The run is the same with and without it.
+        autopilot: the autopilot's settings; default
+            ``planner.autopilot.default_config(localization)``.
+        time_limit: truncation time [s]; None: 60 s per lap plus 30 s.
+        control_rate: the loop's clock [Hz].
+        physics_rate: physics steps per second [Hz], a multiple of ``control_rate``.
 
     Raises:
         TrackFormatError: the track cannot be read, or the world cannot be
             built on it (the message names the track and its start pose).
-        ValueError: ``env_options`` repeats an argument of this function, or
-            ``EnvConfig`` refuses a field.
+        ValueError: a setting out of range.
         BagError: ``bag`` exists and is not an empty directory, or cannot be
             written (checked before the run; nothing is left half written).
         gymnasium.error.DependencyNotInstalled: ``bag`` without the ``ros`` extra.
     """
-    # env_options keys that run_scenario sets itself, and the keyword to use instead
-    own = {
-        "track": "track",
-        "laps": "laps",
-        "sensors": "sensors",
-        "localization": "localization",
-        "render_mode": "render",
-    }
-    repeated = sorted(own.keys() & (env_options or {}).keys())
-    if repeated:
-        instead = ", ".join(f"{own[k]}=" for k in repeated)
-        raise ValueError(
-            f"run_scenario: env_options {repeated} repeat arguments of run_scenario; "
-            f"pass {instead} instead"
-        )
     recorder = None
     if bag is not None:
         recorder = BagRecorder(
@@ -172,21 +149,29 @@ def run_scenario(
             {"conesim.track": track, "conesim.seed": str(seed), "conesim.sensors": sensors,
              "conesim.localization": localization},
         )  # fmt: skip
-    setup0 = time.perf_counter()  # building the env loads (or compiles) the EKF's kernels
+    setup0 = time.perf_counter()  # building the loop loads (or compiles) the kernels
+    config = autopilot or default_config(localization)
     with _world_build_errors(track):
-        env = ConeTrackEnv(
-            render_mode="human" if render else None,
-            track=track,
-            laps=laps,
-            sensors=sensors,
+        the_track = load_track(track)
+        loop = ClosedLoop(
+            the_track,
+            WorldConfig(physics_rate=physics_rate, sensors=sensors),
             localization=localization,
-            **(env_options or {}),
+            control_rate=control_rate,
+            rules=EpisodeRules(laps=laps, time_limit=time_limit),
+            driver=functools.partial(Autopilot, config=config),
         )
+        first = loop.reset(world_seed(np.random.default_rng(seed)))
+    window = _Window(loop) if render else None
     try:
         with recorder or nullcontext():
-            return _drive(env, seed, progress, recorder, setup0)
+            return _drive(
+                loop, first, seed=seed, progress=progress, recorder=recorder, window=window,
+                setup0=setup0,
+            )  # fmt: skip
     finally:
-        env.close()
+        if window is not None:
+            window.close()
 
 
 @contextmanager
@@ -205,129 +190,92 @@ def _world_build_errors(track: str) -> Iterator[None]:
         ) from None
 
 
+class _Window:
+    """``render=True``: each record drawn in a window, at the loop's rate."""
+
+    def __init__(self, loop: ClosedLoop) -> None:
+        self.loop = loop
+        p = loop.world_config.vehicle
+        self.scenes = SceneKeeper(tuple(str(k) for k in loop.track.kinds), p.length, p.width)
+        self.renderer = Renderer(loop.global_path)
+
+    def show(self, record: StepRecord) -> None:
+        """Draw the record."""
+        self.scenes.update(record)
+        loc = self.loop.localizer
+        frame = self.renderer.rgb_array(self.scenes.scene(loc.frames, loc.estimate(record.t)))
+        self.renderer.show(frame, self.loop.control_rate)
+
+    def close(self) -> None:
+        """Close the window."""
+        self.renderer.close()
+
+
 def _drive(
-    env: ConeTrackEnv,
+    loop: ClosedLoop,
+    record: StepRecord,
+    *,
     seed: int,
     progress: Callable[[float, float], None] | None,
     recorder: BagRecorder | None,
+    window: _Window | None,
     setup0: float,
 ) -> RunResult:
-    """Drive one episode; ``setup0``: when building the env began (perf_counter)."""
-    cfg = env.config
-    with _world_build_errors(cfg.track):
-        _, info = env.reset(seed=seed)
-    policy = AutopilotPolicy(env)
-    action = policy.reset(info)
+    """Drive the episode from its first record; ``setup0``: when building began (perf_counter)."""
+    metrics = RunMetrics(loop.track)
     if recorder is not None:
-        recorder.start(env.stack, policy.autopilot)
-    track = env.stack.track
-    centre_tree = _dense_centreline_tree(track)
-    trace = RunTrace()
-    midline_sq: list[float] = []
-    last_plan = None
-    limit = cfg.episode_time_limit
-    # The loop's clock starts here: building the world, the stack and the
+        recorder.start(loop)
+    limit = loop.rules.time_limit_s
+    # The loop's clock starts here: building the world, localization and the
     # autopilot (loading the compiled kernels, or compiling them on a cold
     # cache) is the setup, reported apart.
     wall0 = time.perf_counter()
     setup = wall0 - setup0
     while True:
-        _, _, terminated, truncated, info = env.step(action)
-        action = policy(info)
-        _record(env, policy, trace)
+        metrics.add(record)
         if recorder is not None:
-            recorder.record(env.stack, policy.autopilot)
-        plan = policy.autopilot.plan
-        if plan is not None and plan is not last_plan and len(policy.autopilot.path_reference):
-            dist, _ = centre_tree.query(policy.autopilot.path_reference)
-            midline_sq.extend((dist**2).tolist())
-            last_plan = plan
-        if progress is not None:
-            progress(env.stack.time, limit)
-        if terminated or truncated:
+            recorder.record(record)
+        if window is not None:
+            window.show(record)
+        if record.end is not None:
             break
+        record = loop.step()
+        if progress is not None:
+            progress(record.t, limit)
     wall = time.perf_counter() - wall0
-    _localization_trace(env, trace)
-    return _result(
-        env, policy, info=info, trace=trace, midline_sq=midline_sq, seed=seed,
-        wall=wall, setup=setup,
-    )  # fmt: skip
-
-
-def _dense_centreline_tree(track: Track) -> cKDTree:
-    centre = np.asarray(track.centreline)
-    if track.layout == "closed":
-        centre = np.vstack([centre, centre[:1]])
-    seg = np.hypot(*np.diff(centre, axis=0).T)
-    s = np.concatenate([[0.0], np.cumsum(seg)])
-    fine = np.arange(0.0, s[-1], MIDLINE_SAMPLE_M)
-    return cKDTree(
-        np.column_stack([np.interp(fine, s, centre[:, 0]), np.interp(fine, s, centre[:, 1])])
-    )
-
-
-def _record(env: ConeTrackEnv, policy: AutopilotPolicy, trace: RunTrace) -> None:
-    world = env.stack.world
-    t = world.time
-    state = world.state
-    trace.t.append(t)
-    trace.x.append(state.x)
-    trace.y.append(state.y)
-    trace.speed.append(state.speed)
-    trace.target_speed.append(policy.autopilot.target_speed)
-
-
-def _localization_trace(env: ConeTrackEnv, trace: RunTrace) -> None:
-    """The published pose against truth at every TF broadcast (all three modes)."""
-    for sample in env.stack.localization_samples:
-        trace.loc_t.append(sample.t)
-        trace.loc_pos_err.append(sample.position_error)
-        trace.loc_yaw_err.append(sample.yaw_error)
-
-
-def _rms(values: list[float]) -> float | None:
-    return float(math.sqrt(np.mean(np.square(values)))) if values else None
+    return _result(loop, record, metrics, seed=seed, wall=wall, setup=setup)
 
 
 def _result(
-    env: ConeTrackEnv,
-    policy: AutopilotPolicy,
-    *,
-    info: dict[str, Any],
-    trace: RunTrace,
-    midline_sq: list[float],
-    wall: float,
-    setup: float,
-    seed: int,
+    loop: ClosedLoop, last: StepRecord, metrics: RunMetrics, *, seed: int, wall: float, setup: float
 ) -> RunResult:
-    world = env.stack.world
-    lap_times = [float(v) for v in info["lap_times"]]
-    limit = timed_limit_lap(env.stack.track)
+    race = last.truth.race
+    lap_times = [float(v) for v in race.lap_times]
+    limit = timed_limit_lap(loop.track)
     best = min(lap_times) if lap_times else None
-    yaw_rmse = _rms(trace.loc_yaw_err)
     return RunResult(
-        track=env.stack.track.name,
+        track=loop.track.name,
         seed=seed,
-        sensors=env.stack.world_config.sensor_profile.name,
-        localization=env.stack.localization,
-        laps=env.laps_to_drive,
-        finished=info["laps_completed"] >= env.laps_to_drive,
-        end_reason=info["end_reason"],
-        laps_completed=int(info["laps_completed"]),
+        sensors=loop.world_config.sensor_profile.name,
+        localization=loop.localization,
+        laps=loop.laps_to_drive,
+        finished=race.laps_completed >= loop.laps_to_drive,
+        end_reason=str(last.end),
+        laps_completed=race.laps_completed,
         lap_times_s=lap_times,
         best_lap_s=best,
-        cones_hit=int(info["cones_hit"]),
-        cones_down_or_out=int(info["cones_down_or_out"]),
-        off_track_events=int(info["off_track_events"]),
-        sim_time_s=world.time,
+        cones_hit=race.cones_hit,
+        cones_down_or_out=race.cones_down_or_out,
+        off_track_events=race.off_track_events,
+        sim_time_s=last.t,
         wall_time_s=wall,
-        real_time_factor=world.time / wall if wall > 0 else math.inf,
+        real_time_factor=last.t / wall if wall > 0 else float("inf"),
         setup_time_s=setup,
-        localization_pos_rmse_m=_rms(trace.loc_pos_err),
-        localization_yaw_rmse_deg=None if yaw_rmse is None else math.degrees(yaw_rmse),
-        midline_rmse_m=float(math.sqrt(np.mean(midline_sq))) if midline_sq else None,
-        planner_fallbacks=policy.autopilot.fallback_count,
+        localization_pos_rmse_m=metrics.localization_pos_rmse_m,
+        localization_yaw_rmse_deg=metrics.localization_yaw_rmse_deg,
+        midline_rmse_m=metrics.midline_rmse_m,
+        planner_fallbacks=metrics.fallbacks,
         limit_lap_time_s=limit,
         lap_time_ratio=None if best is None else best / limit,
-        trace=trace,
+        trace=metrics.trace,
     )

@@ -6,7 +6,7 @@ two links into a :class:`~localization.frames.Buffer`::
 
     reference --(dynamic, 20 Hz)--> gps_antenna --(static, once: z = -0.1 m, identity)--> os_sensor
 
-Modes (:class:`BroadcastMode`):
+Modes (:class:`LocalizationMode`):
 
 * ``raw``: the seed as written. ``on_local_xy`` caches the last ``/local_xy``
   (x, y, z) and ``on_global_yaw`` the last ``/global_yaw``; each broadcast sends
@@ -30,7 +30,6 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass
-from enum import StrEnum
 
 from conesim.core.messages import (
     FRAME_GPS_ANTENNA,
@@ -42,18 +41,11 @@ from conesim.core.messages import (
 from conesim.core.pose import Pose2D
 from conesim.localization.ekf import FusionEkf
 from conesim.localization.frames import Buffer, TransformStamped
+from conesim.localization.modes import LocalizationMode
 
 TIME_EPS = 1e-9  # [s] tolerance of the broadcast clock
 
 _log = logging.getLogger(__name__)
-
-
-class BroadcastMode(StrEnum):
-    """Where the ``reference -> gps_antenna`` pose comes from."""
-
-    RAW = "raw"
-    FUSED = "fused"
-    TRUTH = "truth"
 
 
 @dataclass(frozen=True, slots=True)
@@ -70,7 +62,7 @@ class BroadcasterConfig:
         authority: name recorded with every transform.
     """
 
-    mode: BroadcastMode = BroadcastMode.FUSED
+    mode: LocalizationMode = LocalizationMode.FUSED
     rate: float = 20.0  # [Hz] seed 000
     reference_frame: str = FRAME_REFERENCE
     antenna_frame: str = FRAME_GPS_ANTENNA
@@ -79,10 +71,10 @@ class BroadcasterConfig:
     authority: str = "vehicle_tf_broadcaster"
 
     def __post_init__(self) -> None:
-        allowed = [m.value for m in BroadcastMode]
+        allowed = [m.value for m in LocalizationMode]
         if self.mode not in allowed:
             raise ValueError(f"unknown broadcast mode {self.mode!r}; allowed: {allowed}")
-        object.__setattr__(self, "mode", BroadcastMode(self.mode))
+        object.__setattr__(self, "mode", LocalizationMode(self.mode))
         if not (math.isfinite(self.rate) and self.rate > 0.0):
             raise ValueError(f"BroadcasterConfig.rate = {self.rate!r} out of range: allowed > 0 Hz")
 
@@ -107,7 +99,7 @@ class VehicleTfBroadcaster:
     ) -> None:
         self.buffer = buffer
         self.config = config or BroadcasterConfig()
-        if self.config.mode == BroadcastMode.FUSED and ekf is None:
+        if self.config.mode == LocalizationMode.FUSED and ekf is None:
             raise ValueError("broadcast mode 'fused' needs the FusionEkf (ekf=...)")
         self.ekf = ekf
         self.published = 0
@@ -174,11 +166,11 @@ class VehicleTfBroadcaster:
     def _pose(self, t: float, truth: Pose2D | None) -> tuple[Pose2D, float] | None:
         """The pose and height to send in the current mode, or None if there is none yet."""
         mode = self.config.mode
-        if mode == BroadcastMode.TRUTH:
+        if mode == LocalizationMode.TRUTH:
             if truth is None:
                 raise ValueError("broadcast mode 'truth' needs the true pose (truth=...)")
             return truth, 0.0
-        if mode == BroadcastMode.RAW:
+        if mode == LocalizationMode.RAW:
             if self._xyz is None or self._yaw is None:
                 return None
             x, y, z = self._xyz

@@ -15,7 +15,8 @@ localization), the global path, and the messages it receives.
   ``station_hint``.
 - Wheel speeds update the speed estimate; without any, the speed is the
   sensor's displacement in the frame tree over ``speed_window``.
-- Control runs at ``control_rate`` (50 Hz): the path is brought from
+- Control runs at every :meth:`Autopilot.step`, on the closed loop's one
+  clock (``control_rate``, 50 Hz by default): the path is brought from
   ``reference`` into the current ``os_sensor`` frame, pure pursuit steers
   toward its lookahead point, and the PI controller tracks the waypoint
   speeds, within the friction ellipse left by the lateral acceleration the
@@ -28,12 +29,14 @@ there (from numba's cache, 0.2 s; compiled from a cold cache, about 12 s on
 the development machine, 30-45 s on a slower one) rather than on the first
 detection.
 
-Every intermediate is an attribute for drawing and recording: ``classified``
-(left/right cones in ``reference``), ``plan`` (bridge lines, midpoints, path,
-waypoints with speeds, status), ``path_now``, ``pursuit_path`` (the path
-pure pursuit follows: ``path_now``, continued along the global path when it
-ends inside the lookahead circle) and ``lookahead_point`` (current
-``os_sensor``), ``command``; and counters ``plan_count``, ``fallback_count``,
+Each :meth:`Autopilot.step` returns an :class:`AutopilotStep`: the command
+and what the step produced (the plans made from its detections, with their
+left/right cones in ``reference``, bridge lines, midpoints, path and
+waypoints with speeds; the path followed, in ``reference``; the path pure
+pursuit followed and its lookahead point, in ``os_sensor`` now; the target
+speed). The same are attributes of the autopilot (``classified``, ``plan``,
+``path_reference``, ``path_now``, ``pursuit_path``, ``lookahead_point``,
+``command``), with counters ``plan_count``, ``fallback_count``,
 ``failed_count``, ``tf_latest_count``, ``skipped_count``.
 """
 
@@ -43,6 +46,7 @@ import functools
 import logging
 import math
 from collections.abc import Iterable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -75,7 +79,51 @@ from conesim.tracks.global_path import GlobalPath, global_path_from_centreline
 
 _log = logging.getLogger(__name__)
 
-_TIME_EPS = 1e-9  # [s] tolerance of the control schedule
+CONTROL_RATE = 50.0  # [Hz] ARCHITECTURE.md: pure pursuit and speed control
+
+
+def default_config(localization: str) -> AutopilotConfig:
+    """The autopilot's settings for a localization mode: ``AutopilotConfig.cautious()``
+    with ``raw`` (the seed's broadcaster: a pose up to 150 ms old), else the defaults."""
+    return AutopilotConfig.cautious() if localization == "raw" else AutopilotConfig()
+
+
+@dataclass(frozen=True, slots=True)
+class Planned:
+    """One detection's classification and plan.
+
+    Attributes:
+        classified: its cones by side, in ``reference``.
+        plan: the local plan (``os_sensor`` at the detection).
+        path_reference: (n, 2) the plan's path in ``reference`` [m].
+    """
+
+    classified: ClassifiedCones
+    plan: LocalPlan
+    path_reference: FloatArray
+
+
+@dataclass(frozen=True, slots=True)
+class AutopilotStep:
+    """What one control step of the autopilot produced.
+
+    Attributes:
+        command: steering [rad] and acceleration [m/s^2], stamped now.
+        plans: the plans made from this step's detections, oldest first.
+        path_reference: (n, 2) the path followed, in ``reference`` [m] (the
+            last plan's; empty before the first).
+        pursuit_path: (m, 2) the path pure pursuit followed, ``os_sensor`` now [m].
+        lookahead: (2,) the lookahead point in ``os_sensor`` now [m], or None
+            (no path: braking with the wheels straight).
+        target_speed: the speed controller's target [m/s].
+    """
+
+    command: ControlCommand
+    plans: tuple[Planned, ...]
+    path_reference: FloatArray
+    pursuit_path: FloatArray
+    lookahead: FloatArray | None
+    target_speed: float
 
 
 @functools.cache
@@ -115,15 +163,24 @@ class Autopilot:
     Args:
         buffer: the frame tree, fed by localization.
         global_path: the global path in ``reference``.
-        config: every stage's settings, the control rate and the frame names.
+        config: every stage's settings and the frame names.
+        control_rate: how often :meth:`step` is called [Hz] (the loop's clock).
     """
 
     def __init__(
-        self, buffer: Buffer, global_path: GlobalPath, config: AutopilotConfig | None = None
+        self,
+        buffer: Buffer,
+        global_path: GlobalPath,
+        config: AutopilotConfig | None = None,
+        *,
+        control_rate: float = CONTROL_RATE,
     ) -> None:
+        if not (math.isfinite(control_rate) and control_rate > 0.0):
+            raise ValueError(f"Autopilot: control_rate must be > 0 [Hz], got {control_rate!r}")
         warm_up_planner()
         self.buffer = buffer
         self.config = config or AutopilotConfig()
+        self.control_rate = float(control_rate)
         self.projector = PathProjector(global_path)
         self.global_speed = (
             GlobalSpeedPlan(global_path, self.config.speed_profile)
@@ -148,7 +205,6 @@ class Autopilot:
         self.skipped_count = 0
         self.station_hint: float | None = None  # [m] the sensor's last station
         self._last_control: float | None = None
-        self._next_control: float | None = None
 
     # -- intermediates -----------------------------------------------------------------------
 
@@ -173,13 +229,6 @@ class Autopilot:
         return None if self.steering is None else self.steering.target
 
     # -- inputs ------------------------------------------------------------------------------
-
-    def handle(self, message: Message) -> None:
-        """Take one message: detections plan, wheel speeds update the speed; others are ignored."""
-        if isinstance(message, ConeDetections):
-            self.on_detections(message)
-        elif isinstance(message, WheelSpeed):
-            self.on_wheel_speed(message)
 
     def on_wheel_speed(self, message: WheelSpeed) -> None:
         """Update the speed estimate [m/s] (a non-finite speed is ignored)."""
@@ -294,7 +343,7 @@ class Autopilot:
     def control(self, t: float) -> ControlCommand:
         """One control step at time ``t`` [s]: steering and acceleration."""
         c = self.config
-        dt = 1.0 / c.control_rate if self._last_control is None else t - self._last_control
+        dt = 1.0 / self.control_rate if self._last_control is None else t - self._last_control
         self._last_control = t
         speed = self.speed()
         path = self._path_in_sensor_frame()
@@ -395,17 +444,25 @@ class Autopilot:
             self.path_now = self.plan.path
         return self.path_now
 
-    def step(self, t: float, messages: Iterable[Message] = ()) -> ControlCommand | None:
-        """Take the messages delivered at ``t`` [s], then control if a control step is due.
-
-        Returns:
-            The command of a control step run now, else None.
-        """
+    def step(self, t: float, messages: Iterable[Message] = ()) -> AutopilotStep:
+        """One control step at ``t`` [s]: take the messages delivered since the
+        last step (detections plan, wheel speeds update the speed), then steer
+        and set the acceleration."""
+        plans: list[Planned] = []
         for message in messages:
-            self.handle(message)
-        if self._next_control is not None and t < self._next_control - _TIME_EPS:
-            return None
-        period = 1.0 / self.config.control_rate
-        nxt = t + period if self._next_control is None else self._next_control + period
-        self._next_control = max(nxt, t + _TIME_EPS)
-        return self.control(t)
+            if isinstance(message, ConeDetections):
+                plan = self.on_detections(message)
+                if plan is not None:
+                    assert self.classified is not None  # set with the plan
+                    plans.append(Planned(self.classified, plan, self.path_reference))
+            elif isinstance(message, WheelSpeed):
+                self.on_wheel_speed(message)
+        command = self.control(t)
+        return AutopilotStep(
+            command=command,
+            plans=tuple(plans),
+            path_reference=self.path_reference,
+            pursuit_path=self.pursuit_path,
+            lookahead=self.lookahead_point,
+            target_speed=self.target_speed,
+        )

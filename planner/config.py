@@ -475,7 +475,7 @@ class SpeedControlConfig(Settings):
 
 @dataclass(frozen=True)
 class AutopilotConfig(Settings):
-    """The whole autopilot: its stages' settings, rates and frame names.
+    """The whole autopilot: its stages' settings and frame names (its rate is the loop's).
 
     Attributes:
         classifier: cone side classification.
@@ -483,7 +483,6 @@ class AutopilotConfig(Settings):
         speed_profile: speed limits along the path.
         pure_pursuit: steering.
         speed_control: longitudinal control.
-        control_rate: control (steering, acceleration) rate [Hz] (design card: 50 Hz).
         global_speed: let the local speed profile end at the global path's
             speed at its last station (``planner.global_speed``) instead of
             standing still at the end of the seen path.
@@ -527,7 +526,6 @@ class AutopilotConfig(Settings):
     speed_profile: SpeedProfileConfig = field(default_factory=SpeedProfileConfig)
     pure_pursuit: PurePursuitConfig = field(default_factory=PurePursuitConfig)
     speed_control: SpeedControlConfig = field(default_factory=SpeedControlConfig)
-    control_rate: float = 50.0  # [Hz]
     global_speed: bool = True
     speed_source: str = "global"
     pursue_global_beyond_path: bool = True
@@ -559,7 +557,6 @@ class AutopilotConfig(Settings):
         )
 
     def __post_init__(self) -> None:
-        _check("AutopilotConfig", "control_rate", self.control_rate, 1e-9)
         _check("AutopilotConfig", "speed_window", self.speed_window, 1e-9)
         _check("AutopilotConfig", "pursue_global_max_gap", self.pursue_global_max_gap, 0.0)
         if self.speed_source not in ("local", "global"):

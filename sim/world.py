@@ -4,8 +4,9 @@
 and the sensor suite. Each call to :meth:`World.step` runs one physics step
 (default 200 Hz) with the current actuator command, then hands the truth of
 that instant to the sensors and returns the measurements whose delivery time
-has come, in stamp order. The gymnasium env (``envs``) wraps this; nothing
-else steps pymunk.
+has come, in stamp order, with the events of the step (``sim.events``: cone
+hits, cones down or out, leaving and rejoining the track, laps). The closed
+loop (``envs.loop``) steps it; nothing else steps pymunk.
 
 Step skeleton (fixed order, one physics step of ``dt``):
 
@@ -15,6 +16,7 @@ Step skeleton (fixed order, one physics step of ``dt``):
 4. ``race.update(...)``: progress, laps (crossing interpolated in the step),
    off-track, stuck.
 5. ``sensors.step(truth)``: captures due at ``t``; returns deliveries due.
+6. the step's events, from what changed in the cone field and race control.
 """
 
 from __future__ import annotations
@@ -29,6 +31,16 @@ from conesim.core.geodesy import DEFAULT_ORIGIN, ReferenceOrigin
 from conesim.core.messages import Message
 from conesim.core.pose import Pose2D
 from conesim.sim.cones import ConeField, ConeParams
+from conesim.sim.events import (
+    BackOnTrack,
+    ConeDown,
+    ConeHit,
+    Event,
+    LapCompleted,
+    OffTrack,
+    RaceStanding,
+    WorldStep,
+)
 from conesim.sim.race_control import RaceControl, RaceRules, RaceState, timed_lap_length
 from conesim.sim.sensors import SensorProfile, SensorSuite, TruthSample, get_profile
 from conesim.sim.sensors.cone_map import ConeMap
@@ -221,34 +233,73 @@ class World:
         """Actuator demand held until changed (clipped to the car's limits)."""
         self.vehicle.set_command(steer_rad, accel_mps2)
 
-    def step(self) -> list[Message]:
-        """Advance one physics step; return the measurements delivered now."""
+    def step(self) -> WorldStep:
+        """Advance one physics step: the measurements delivered now and the step's events."""
         dt = self._dt
         kin = self._kin
         prev_xy = (kin[0], kin[1])
+        cones = self.cones
+        race = self.race.state
+        hits_before = len(cones.hit_events)
+        laps_before = len(race.lap_times)
+        off_before = race.is_off_track
         vehicle = self.vehicle
         vehicle.pre_step(dt)
         self.space.step(dt)
         vehicle.post_step()
         self.steps += 1
         t = self.steps * dt  # no accumulated round-off: t is exact in steps
-        self.cones.update(t)
+        new_down = cones.update(t)
         self._refresh()
         kin = self._kin
         self.race.update_xy(self.time, t, prev_xy, (kin[0], kin[1], kin[2]))
         self.time = t
-        if self.cones.version != self._cone_version:
-            self.cone_map.update(self.cones.positions)
-            self._cone_version = self.cones.version
-        return self.sensors.step(self._truth())
+        if cones.version != self._cone_version:
+            self.cone_map.update(cones.positions)
+            self._cone_version = cones.version
+        messages = self.sensors.step(self._truth())
+        events: list[Event] = []
+        if len(cones.hit_events) != hits_before or new_down:
+            self._cone_events(hits_before, new_down, t, events)
+        if race.is_off_track != off_before:
+            kind = OffTrack if race.is_off_track else BackOnTrack
+            events.append(kind(t, kin[0], kin[1]))
+        if len(race.lap_times) != laps_before:
+            lap = len(race.lap_times)
+            events.append(LapCompleted(race.crossing_times[-1], lap, race.lap_times[-1]))
+        return WorldStep(t, messages, events)
+
+    def _cone_events(
+        self, hits_before: int, new_down: list[int], t: float, out: list[Event]
+    ) -> None:
+        """The cone hits recorded since ``hits_before`` and the cones ``new_down`` at ``t``."""
+        initial = self.cones.initial_positions
+        for t_hit, i in self.cones.hit_events[hits_before:]:
+            out.append(ConeHit(t_hit, i, float(initial[i, 0]), float(initial[i, 1])))
+        for i in new_down:
+            out.append(ConeDown(t, i, float(initial[i, 0]), float(initial[i, 1])))
 
     def advance(self, duration_s: float) -> list[Message]:
         """Run whole physics steps covering ``duration_s``; all measurements, in order."""
         n = max(1, round(duration_s / self.dt))
         out: list[Message] = []
         for _ in range(n):
-            out.extend(self.step())
+            out.extend(self.step().messages)
         return out
+
+    def standing(self) -> RaceStanding:
+        """The race so far (laps, progress, cones, excursions), after the last step."""
+        race = self.race.state
+        return RaceStanding(
+            progress_m=race.progress_m,
+            laps_completed=race.laps_completed,
+            lap_times=tuple(race.lap_times),
+            cones_hit=len(self.cones.hit_ids),
+            cones_down_or_out=len(self.cones.doo_ids),
+            off_track_events=len(race.off_track),
+            off_track=race.is_off_track,
+            stuck=race.stuck,
+        )
 
     def _truth(self) -> TruthSample:
         """The truth at the antenna, where the GPS, IMU and cone sensor sit.

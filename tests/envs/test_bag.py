@@ -32,7 +32,7 @@ from conesim.envs import bag as bag_module
 from conesim.envs import runner
 from conesim.envs.bag import TOPICS, BagError, BagRecorder
 from conesim.envs.cli import main
-from conesim.envs.cone_track_env import ConeTrackEnv
+from conesim.envs.loop import ClosedLoop
 from conesim.envs.ros_messages import typestore
 from conesim.envs.runner import TIMING_FIELDS, RunResult, run_scenario
 from conesim.planner.autopilot import Autopilot
@@ -50,7 +50,7 @@ class Recorded:
 
     path: Path
     result: RunResult
-    env: ConeTrackEnv
+    loop: ClosedLoop
     messages: Messages  # topic -> [(bag time [ns], message)]
     types: dict[str, str]  # topic -> type
 
@@ -67,14 +67,14 @@ def read_bag(path: Path) -> tuple[Messages, dict[str, str]]:
     return dict(messages), types
 
 
-def record_run(path: Path, **kwargs: Any) -> tuple[RunResult, ConeTrackEnv]:
-    """``run_scenario`` with a bag, keeping the env it drove."""
-    captured: list[ConeTrackEnv] = []
+def record_run(path: Path, **kwargs: Any) -> tuple[RunResult, ClosedLoop]:
+    """``run_scenario`` with a bag, keeping the loop it drove."""
+    captured: list[ClosedLoop] = []
     real_drive = runner._drive
 
-    def drive(env: ConeTrackEnv, *args: Any) -> RunResult:
-        captured.append(env)
-        return real_drive(env, *args)
+    def drive(loop: ClosedLoop, *args: Any, **kw: Any) -> RunResult:
+        captured.append(loop)
+        return real_drive(loop, *args, **kw)
 
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(runner, "_drive", drive)
@@ -82,16 +82,16 @@ def record_run(path: Path, **kwargs: Any) -> tuple[RunResult, ConeTrackEnv]:
     return result, captured[0]
 
 
-RUN: dict[str, Any] = {"track": "trackdrive", "seed": 0, "env_options": {"time_limit": DURATION}}
+RUN: dict[str, Any] = {"track": "trackdrive", "seed": 0, "time_limit": DURATION}
 
 
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory: pytest.TempPathFactory) -> Recorded:
     """The 3 s trackdrive run's bag."""
     path = tmp_path_factory.mktemp("bag") / "run"
-    result, env = record_run(path, **RUN)
+    result, loop = record_run(path, **RUN)
     messages, types = read_bag(path)
-    return Recorded(path, result, env, messages, types)
+    return Recorded(path, result, loop, messages, types)
 
 
 def stamp_ns(msg: Any) -> int:
@@ -100,10 +100,10 @@ def stamp_ns(msg: Any) -> int:
 
 
 def autopilot(recorded: Recorded) -> Autopilot:
-    """The autopilot that drove the run (the env's overlay)."""
-    overlay = recorded.env.overlay
-    assert isinstance(overlay, Autopilot)
-    return overlay
+    """The autopilot that drove the run (the loop's driver)."""
+    driver = recorded.loop.driver
+    assert isinstance(driver, Autopilot)
+    return driver
 
 
 def test_bag_directory_holds_metadata_and_one_mcap_file(recorded: Recorded) -> None:
@@ -156,7 +156,7 @@ def test_counts_match_the_sensor_rates(recorded: Recorded) -> None:
     assert [expected[k] for k in ("/wheel_speed", "/sorted_cones_time")] == [151, 29]
     # One /tf per broadcast into the frame tree, 20 Hz apart.
     tf_ns = [t for t, _ in recorded.messages["/tf"]]
-    assert len(tf_ns) == len(recorded.env.stack.localization_samples)
+    assert len(tf_ns) == len(recorded.result.trace.loc_t)
     assert set(np.diff(tf_ns).tolist()) == {50_000_000}
     # One set of planner topics per plan: every detection was planned.
     plans = autopilot(recorded).plan_count
@@ -201,19 +201,21 @@ def test_navsatfix_round_trips_to_the_frame_tree(recorded: Recorded) -> None:
     """Each fix, projected with the seed's geodesy, is within 0.15 m (about 4 sigma of
     rtk's 2.5 cm per axis plus the EKF's ~1 cm) of gps_antenna in the frame tree at
     the fix's stamp, and is the /local_xy point to 1e-9 m."""
-    stack = recorded.env.stack
+    loop = recorded.loop
     points = recorded.messages["/local_xy"]
     checked = 0
     for (_, fix), (_, point) in zip(recorded.messages["/ublox_gps_node/fix"], points, strict=True):
-        x, y = gps_to_local_cartesian(fix.latitude, fix.longitude, stack.world_config.origin)
+        x, y = gps_to_local_cartesian(fix.latitude, fix.longitude, loop.world_config.origin)
         assert_allclose([x, y], [point.point.x, point.point.y], atol=1e-9)
         stamp = stamp_ns(fix) / NS
         assert fix.header.frame_id == "gps_antenna" and point.header.frame_id == "reference"
         assert fix.position_covariance_type == 3
         assert_allclose(fix.position_covariance[[0, 4]], 0.025**2)
-        if stamp == 0.0 or not stack.buffer.can_transform("reference", "gps_antenna", stamp):
+        if stamp == 0.0 or not loop.localizer.frames.can_transform(
+            "reference", "gps_antenna", stamp
+        ):
             continue  # 0 means "latest" to the frame tree; before the first broadcast
-        pose = stack.buffer.lookup_pose2d("reference", "gps_antenna", stamp)
+        pose = loop.localizer.frames.lookup_pose2d("reference", "gps_antenna", stamp)
         assert math.hypot(float(x) - pose.x, float(y) - pose.y) < 0.15
         checked += 1
     assert checked >= 25
@@ -222,7 +224,7 @@ def test_navsatfix_round_trips_to_the_frame_tree(recorded: Recorded) -> None:
 def test_tf_equals_the_frame_tree(recorded: Recorded) -> None:
     """Every /tf transform is the frame tree's reference -> gps_antenna at its stamp;
     /tf_static is gps_antenna -> os_sensor, 0.1 m down, stamped 0."""
-    buffer = recorded.env.stack.buffer
+    buffer = recorded.loop.localizer.frames
     for t, msg in recorded.messages["/tf"]:
         (tf,) = msg.transforms
         assert (tf.header.frame_id, tf.child_frame_id) == ("reference", "gps_antenna")
@@ -441,7 +443,7 @@ def test_a_failed_move_into_place_leaves_nothing(
 
     monkeypatch.setattr(os, "replace", replace)
     with pytest.raises(BagError, match=r"new/bag: cannot write the bag \(Permission denied\)"):
-        run_scenario("acceleration", bag=target, env_options={"time_limit": 0.5})
+        run_scenario("acceleration", bag=target, time_limit=0.5)
     assert list(tmp_path.iterdir()) == []
 
 
@@ -459,7 +461,7 @@ def test_a_symlink_to_an_empty_directory_gets_the_bag(tmp_path: Path) -> None:
     not beside it, so the move cannot fail after the run."""
     (tmp_path / "real").mkdir()
     (tmp_path / "link").symlink_to(tmp_path / "real", target_is_directory=True)
-    run_scenario("acceleration", bag=tmp_path / "link", env_options={"time_limit": 0.5})
+    run_scenario("acceleration", bag=tmp_path / "link", time_limit=0.5)
     assert sorted(p.name for p in (tmp_path / "real").iterdir()) == ["link.mcap", "metadata.yaml"]
     assert (tmp_path / "link").is_symlink()
     messages, _ = read_bag(tmp_path / "real")

@@ -363,10 +363,10 @@ def test_run_world_build_failure_names_the_track(
 ) -> None:
     """A geodesy error while the world is built names the track file and its start pose."""
 
-    def unbuildable(**kwargs: object) -> None:
+    def unbuildable(*args: object, **kwargs: object) -> None:
         raise GeodesyError("local_cartesian_to_gps: longitude out of range [-180, 180] deg: 1e4")
 
-    monkeypatch.setattr(runner, "ConeTrackEnv", unbuildable)
+    monkeypatch.setattr(runner, "ClosedLoop", unbuildable)
     path = tmp_path / "fssim.yaml"
     write_fssim(path)
     out_dir = tmp_path / "run"
@@ -520,11 +520,11 @@ def test_commands_other_than_run_load_no_compiled_kernels() -> None:
     writable cache directory."""
     code = (
         "import sys, contextlib, io\n"
-        "from envs.cli import main\n"
+        "from conesim.envs.cli import main\n"
         "with contextlib.redirect_stdout(io.StringIO()):\n"
         "    assert main(['tracks']) == 0 and main(['track', 'check', 'skidpad']) == 0\n"
         "loaded = sorted(m for m in sys.modules if m.split('.')[0] == 'numba'"
-        " or m in ('envs.runner', 'envs.stack', 'planner'))\n"
+        " or m in ('conesim.envs.runner', 'conesim.envs.loop', 'conesim.planner'))\n"
         "assert not loaded, loaded\n"
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)

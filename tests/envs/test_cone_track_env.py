@@ -11,14 +11,14 @@ from gymnasium.utils.env_checker import check_env
 from numpy.testing import assert_allclose
 
 from conesim import envs
-from conesim.envs.autopilot_policy import AutopilotPolicy
 from conesim.envs.cone_track_env import ConeTrackEnv
 from conesim.envs.config import EnvConfig
+from conesim.envs.expert import AutopilotExpert
 from conesim.planner import AutopilotConfig
 
 
 def test_registered_and_made_with_one_import() -> None:
-    """gym.make finds conesim/ConeTrack-v0 after `import envs`, with max_episode_steps."""
+    """gym.make finds conesim/ConeTrack-v0 after `import conesim`, with max_episode_steps."""
     env = gym.make(envs.ENV_ID)
     assert env.spec is not None
     assert env.spec.max_episode_steps == envs.DEFAULT_MAX_EPISODE_STEPS
@@ -100,7 +100,7 @@ def test_reset_options_and_bad_config() -> None:
     """reset(options) switches track; unknown keys and values are refused with the allowed list."""
     env = ConeTrackEnv()
     env.reset(seed=1, options={"track": "skidpad", "sensors": "ideal"})
-    assert env.stack.track.name == "skidpad"
+    assert env.loop.track.name == "skidpad"
     with pytest.raises(ValueError, match="allowed"):
         env.reset(options={"weather": "rain"})
     with pytest.raises(ValueError, match="allowed keys"):
@@ -213,9 +213,9 @@ def test_reset_options_last_one_episode_and_bad_ones_change_nothing() -> None:
     """Options apply to one episode; a bad option leaves the env usable and unchanged."""
     env = ConeTrackEnv(sensors="ideal")
     env.reset(seed=3, options={"track": "skidpad"})
-    assert env.stack.track.name == "skidpad"
+    assert env.loop.track.name == "skidpad"
     env.reset(seed=3)
-    assert env.stack.track.name == "trackdrive"
+    assert env.loop.track.name == "trackdrive"
     with pytest.raises(Exception, match="monza"):
         env.reset(seed=3, options={"track": "monza"})
     obs, _ = env.reset(seed=3)
@@ -232,7 +232,7 @@ def test_reset_without_seed_continues_the_rng_reproducibly() -> None:
         seeds = []
         for _ in range(2):
             env.reset()
-            seeds.append(env.stack.world.seed)
+            seeds.append(env.loop.world.seed)
         runs.append(seeds)
     assert runs[0] == runs[1] and runs[0][0] != runs[0][1]
 
@@ -264,27 +264,52 @@ def test_localization_error_in_every_mode() -> None:
         assert err["position_m"] < (1e-9 if mode == "truth" else 0.2)
 
 
-def test_autopilot_policy_drives_raw_localization_cautiously() -> None:
+def test_autopilot_expert_drives_raw_localization_cautiously() -> None:
     """Default settings with fused localization; the cautious preset (6 m/s^2
     lateral with no downforce share, in the plan and the command's ellipse,
     6 m/s^2 braking, 15 m/s) in an episode with raw localization, also when a reset
-    option picks it; settings given to the policy are kept."""
+    option picks it; settings given to the expert are kept."""
     env = ConeTrackEnv(track="autocross")
-    env.reset(seed=0)
-    policy = AutopilotPolicy(env)
-    assert policy.autopilot.config == AutopilotConfig()
-    env.reset(seed=0, options={"localization": "raw"})
-    policy.reset()
-    assert policy.autopilot.config == AutopilotConfig.cautious()
-    profile = policy.autopilot.config.speed_profile
-    control = policy.autopilot.config.speed_control
+    _, info = env.reset(seed=0)
+    expert = AutopilotExpert(env)
+    expert.reset(info)
+    assert expert.autopilot is not None and expert.autopilot.config == AutopilotConfig()
+    _, info = env.reset(seed=0, options={"localization": "raw"})
+    expert.reset(info)
+    assert expert.autopilot.config == AutopilotConfig.cautious()
+    profile = expert.autopilot.config.speed_profile
+    control = expert.autopilot.config.speed_control
     assert (profile.a_lat_max, profile.a_lat_aero, profile.a_brake, profile.v_max) == (
         6.0, 0.0, 6.0, 15.0,
     )  # fmt: skip
     assert (control.lateral_grip, control.grip_aero) == (6.0, 0.0)
-    given = AutopilotConfig.from_dict({"control_rate": 40.0})
-    kept = AutopilotPolicy(env, given)
-    assert kept.autopilot.config == given
+    given = AutopilotConfig.from_dict({"speed_window": 0.2})
+    kept = AutopilotExpert(env, given)
+    kept.reset(info)
+    assert kept.autopilot is not None and kept.autopilot.config == given
+
+
+def test_autopilot_expert_completes_a_lap_through_the_env() -> None:
+    """The expert, through the env's public interface only, drives the
+    acceleration run clean, within 1 % of the loop's own autopilot run of the
+    same seed (the env's float32 actions round its commands)."""
+    from conesim.envs.runner import run_scenario
+
+    env = ConeTrackEnv(track="acceleration", sensors="ideal")
+    _, info = env.reset(seed=4)
+    expert = AutopilotExpert(env)
+    action = expert.reset(info)
+    while True:
+        _, _, terminated, truncated, info = env.step(action)
+        if terminated or truncated:
+            break
+        action = expert(info)
+    assert info["end_reason"] == "laps_completed"
+    assert info["cones_down_or_out"] == 0 and info["off_track_events"] == 0
+    assert expert.output is not None  # the step before the last (the last one ended it)
+    assert expert.output.command.stamp == pytest.approx(info["t"] - 1.0 / env.config.control_rate)
+    direct = run_scenario("acceleration", sensors="ideal", seed=4)
+    assert direct.lap_times_s[0] == pytest.approx(info["lap_times"][0], rel=0.01)
 
 
 def test_uncertainty_before_the_filter_has_an_estimate() -> None:
@@ -293,7 +318,7 @@ def test_uncertainty_before_the_filter_has_an_estimate() -> None:
     env = ConeTrackEnv(localization="fused")
     obs, _ = env.reset(seed=0)
     assert_allclose(obs[4:6], [1e3, math.pi], rtol=1e-6)
-    while env.stack.estimate() is None:
+    while env.loop.localizer.estimate(env.loop.time) is None:
         obs, _, _, _, _ = env.step(np.zeros(2, dtype=np.float32))
     assert 0.0 < obs[4] < 0.1 and 0.0 < obs[5] < 0.1
     for mode in ("truth", "raw"):
@@ -314,7 +339,7 @@ def test_dict_pose_in_every_localization_mode() -> None:
             obs, _, _, _, _ = env.step(np.array([0.0, 0.5], dtype=np.float32))
         assert env.observation_space.contains(obs)
         assert obs["pose_valid"][0] == 1.0
-        antenna = env.stack.world.antenna_pose
+        antenna = env.loop.world.antenna_pose
         error = math.hypot(obs["pose"][0] - antenna.x, obs["pose"][1] - antenna.y)
         # 1 s, broadcast every 50 ms = every 2.5 control steps: the truth
         # broadcast is this step's (t = 1.0 s is on the grid).
@@ -383,10 +408,10 @@ def test_bad_start_pose_option_is_named(start: object) -> None:
     its episode."""
     env = ConeTrackEnv()
     env.reset(seed=0)
-    before = env.stack
+    before = env.loop
     with pytest.raises(ValueError, match="reset option start_pose"):
         env.reset(seed=0, options={"start_pose": start})
-    assert env.stack is before
+    assert env.loop is before
 
 
 def test_a_start_pose_beyond_the_end_of_an_open_lane_is_off_the_track() -> None:

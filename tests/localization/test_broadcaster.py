@@ -16,14 +16,15 @@ from conesim.core.messages import (
     PointStamped,
 )
 from conesim.core.pose import Pose2D
-from conesim.localization.broadcaster import BroadcasterConfig, BroadcastMode, VehicleTfBroadcaster
+from conesim.localization.broadcaster import BroadcasterConfig, VehicleTfBroadcaster
 from conesim.localization.ekf import FusionEkf
 from conesim.localization.ekf.synthetic import fix_message
 from conesim.localization.frames import Buffer, TransformStamped
+from conesim.localization.modes import LocalizationMode
 
 
 def raw(buffer: Buffer) -> VehicleTfBroadcaster:
-    return VehicleTfBroadcaster(buffer, BroadcasterConfig(mode=BroadcastMode.RAW))
+    return VehicleTfBroadcaster(buffer, BroadcasterConfig(mode=LocalizationMode.RAW))
 
 
 def seed_quaternion(yaw: float) -> list[float]:
@@ -93,7 +94,7 @@ def test_fused_publishes_the_ekf_estimate_at_the_broadcast_time() -> None:
     buffer = Buffer()
     ekf = FusionEkf()
     node = VehicleTfBroadcaster(buffer, ekf=ekf)
-    assert node.config.mode == BroadcastMode.FUSED
+    assert node.config.mode == LocalizationMode.FUSED
     assert node.step(0.0) is None
     ekf.process(Imu(Header(0.0, FRAME_GPS_ANTENNA), 0.2, 0.0, 0.0, 1e-6, 1e-4))
     ekf.process(HeadingStamped(Header(0.0, FRAME_REFERENCE), 1.0, 1e-4))
@@ -109,7 +110,7 @@ def test_fused_publishes_the_ekf_estimate_at_the_broadcast_time() -> None:
 def test_truth_mode_publishes_the_given_pose() -> None:
     """Truth mode sends what the caller passes, and needs it."""
     buffer = Buffer()
-    node = VehicleTfBroadcaster(buffer, BroadcasterConfig(mode=BroadcastMode.TRUTH))
+    node = VehicleTfBroadcaster(buffer, BroadcasterConfig(mode=LocalizationMode.TRUTH))
     node.step(0.0, truth=Pose2D(1.0, 2.0, -3.0))
     assert buffer.lookup_pose2d("reference", "gps_antenna", 0.0) == Pose2D(1.0, 2.0, -3.0)
     with pytest.raises(ValueError, match="truth"):
@@ -118,18 +119,18 @@ def test_truth_mode_publishes_the_given_pose() -> None:
 
 def test_bad_settings_raise_with_the_allowed_values() -> None:
     """Unknown mode lists the modes; fused without a filter raises."""
-    with pytest.raises(ValueError, match="allowed: \\['raw', 'fused', 'truth'\\]"):
+    with pytest.raises(ValueError, match="allowed: \\['fused', 'raw', 'truth'\\]"):
         BroadcasterConfig(mode="gps")  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="needs the FusionEkf"):
         VehicleTfBroadcaster(Buffer())
-    assert BroadcasterConfig(mode="raw").mode is BroadcastMode.RAW  # type: ignore[arg-type]
+    assert BroadcasterConfig(mode="raw").mode is LocalizationMode.RAW  # type: ignore[arg-type]
 
 
 def test_prefixed_frames_for_a_second_car() -> None:
     """Frame names come from the config (seed 003: car1/gps_antenna)."""
     buffer = Buffer()
     cfg = BroadcasterConfig(
-        mode=BroadcastMode.TRUTH, antenna_frame="car1/gps_antenna", sensor_frame="car1/os_sensor"
+        mode=LocalizationMode.TRUTH, antenna_frame="car1/gps_antenna", sensor_frame="car1/os_sensor"
     )
     VehicleTfBroadcaster(buffer, cfg).step(0.0, truth=Pose2D(1.0, 0.0, 0.0))
     t = buffer.lookup_transform("reference", "car1/os_sensor", 0.0)

@@ -118,7 +118,7 @@ def record() -> list[Tick]:
     ticks: list[Tick] = [(world.time, list(world.reset(SEED)))]
     while world.time < DURATION - 1e-9:
         world.set_command(*command(world.time))
-        msgs = world.step()
+        msgs = world.step().messages
         ticks.append((world.time, list(msgs)))
     return ticks
 

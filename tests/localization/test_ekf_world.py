@@ -31,7 +31,7 @@ def test_rtk_lap_start_tracks_the_truth() -> None:
         target = path[(i + 8) % len(path)] - (s.x, s.y)
         alpha = math.atan2(target[1], target[0]) - s.yaw
         world.set_command(math.atan2(2 * 1.53 * math.sin(alpha), 4.0), 2.0 * (8.0 - s.vx))
-        for msg in world.step():
+        for msg in world.step().messages:
             result = ekf.process(msg)
             if isinstance(msg, NavSatFix) and result is not None and result.nis is not None:
                 nis.append(result.nis)

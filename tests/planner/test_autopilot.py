@@ -3,7 +3,8 @@
 The closed loop uses a kinematic bicycle about the rear axle written here (the
 planner's tests do not depend on ``sim``): 100 Hz steps, the frame tree at
 20 Hz, detections of the synthetic track's cones at 10 Hz delivered 0.1 s
-after capture, wheel speed at 50 Hz.
+after capture, wheel speed at 50 Hz, and the autopilot stepped at 50 Hz
+with the messages delivered since its last step.
 """
 
 from __future__ import annotations
@@ -60,14 +61,14 @@ def drive(
         start.yaw,
     )
     buffer = Buffer()
-    autopilot = Autopilot(buffer, track.global_path, config)
+    autopilot = Autopilot(buffer, track.global_path, config, control_rate=50.0)
     cones = np.vstack([track.left, track.right])
     pending: list[tuple[float, ConeDetections]] = []
     command = ControlCommand(0.0, 0.0, 0.0)
     commands, trace = [], []
+    messages: list[Message] = []
     for k in range(round(seconds * 100)):
         t = k * 0.01
-        messages: list[Message] = []
         if k % 5 == 0:
             synth.set_pose(buffer, car.antenna, t)
         if k % 10 == 0:
@@ -76,10 +77,10 @@ def drive(
             messages.append(WheelSpeed(Header(t, "gps_antenna"), car.v, 0.01))
         while pending and pending[0][0] <= t + 1e-9:
             messages.append(pending.pop(0)[1])
-        out = autopilot.step(t, messages)
-        if out is not None:
-            command = out
-            commands.append(out)
+        if k % 2 == 0:  # the 50 Hz control clock
+            command = autopilot.step(t, messages).command
+            commands.append(command)
+            messages = []
         car.step(command.steering, command.acceleration, 0.01)
         trace.append((t, car.antenna, car.v))
     return autopilot, commands, trace
@@ -150,12 +151,21 @@ def test_closed_loop_through_a_hairpin(synth: ModuleType, hairpin) -> None:
     assert np.max(hairpin.distance_to_centre(wide)) > 0.8
 
 
-def test_control_runs_at_its_own_rate(synth: ModuleType, straight) -> None:
-    """Stepped at 200 Hz for 0.1 s, control answers at 50 Hz: 5 commands."""
+def test_every_step_controls_on_the_callers_clock(synth: ModuleType, straight) -> None:
+    """One command per step, stamped with the step's time; a step's plans are
+    the ones its detections made; the rate must be positive."""
     scene = synth.make_scene(straight, Pose2D(0.0, 0.0, 0.0))
-    autopilot = Autopilot(scene.buffer, straight.global_path)
-    out = [autopilot.step(k * 0.005) for k in range(20)]
-    assert [c.stamp for c in out if c is not None] == pytest.approx([0.0, 0.02, 0.04, 0.06, 0.08])
+    autopilot = Autopilot(scene.buffer, straight.global_path, control_rate=25.0)
+    out = [autopilot.step(k * 0.04) for k in range(5)]
+    assert [o.command.stamp for o in out] == pytest.approx([0.0, 0.04, 0.08, 0.12, 0.16])
+    assert all(o.plans == () and o.lookahead is None for o in out)  # no detection yet
+    planned = autopilot.step(0.2, [scene.detections])
+    ((only,),) = (planned.plans,)
+    assert only.plan is autopilot.plan and only.plan.status is PlanStatus.OK
+    assert planned.path_reference is autopilot.path_reference and len(planned.path_reference)
+    assert planned.lookahead is not None
+    with pytest.raises(ValueError, match="control_rate must be > 0"):
+        Autopilot(scene.buffer, straight.global_path, control_rate=0.0)
 
 
 def test_without_a_path_it_stops_with_straight_wheels(synth: ModuleType, straight) -> None:

@@ -26,12 +26,12 @@ def test_nested_mapping_builds_nested_settings() -> None:
     """AutopilotConfig.from_dict turns nested mappings into the stage settings."""
     config = AutopilotConfig.from_dict(
         {
-            "control_rate": 100.0,
+            "speed_window": 0.2,
             "pure_pursuit": {"wheelbase": 2.0},
             "classifier": {"mode": "colour"},
         }
     )
-    assert config.control_rate == 100.0
+    assert config.speed_window == 0.2
     assert config.pure_pursuit == PurePursuitConfig(wheelbase=2.0)
     assert config.classifier.mode == "colour"
     assert config.midline == MidlineConfig()
@@ -56,7 +56,7 @@ def test_unknown_nested_key_raises() -> None:
         (ClassifierConfig, {"left_colours": ("blue",), "right_colours": ("blue",)}),
         (ClassifierConfig, {"left_colours": "blue"}),  # a string, not a tuple of colours
         (ClassifierConfig, {"right_colours": ("Yellow",)}),  # not a CONE_COLOURS label
-        (AutopilotConfig, {"control_rate": 0.0}),
+        (AutopilotConfig, {"speed_window": 0.0}),
         (AutopilotConfig, {"speed_source": "map"}),
         (SpeedControlConfig, {"integral_band": -1.0}),
         (SpeedControlConfig, {"lateral_grip": 0.0}),

@@ -54,7 +54,7 @@ def test_same_seed_same_run_bit_for_bit() -> None:
         msgs: list[Message] = []
         for k in range(600):
             world.set_command(0.2 * math.sin(k / 50), 2.0)
-            msgs += world.step()
+            msgs += world.step().messages
         runs.append((flatten(msgs), world.state))
     assert runs[0] == runs[1]
 
@@ -74,7 +74,7 @@ def test_messages_in_stamp_order_at_their_rates() -> None:
     msgs = world.reset(0)
     latency = {"NavSatFix": 0.05, "HeadingStamped": 0.05, "ConeDetections": 0.2}
     for _ in range(400):
-        delivered = world.step()
+        delivered = world.step().messages
         stamps = [m.header.stamp for m in delivered]
         assert stamps == sorted(stamps)
         for m in delivered:
@@ -96,7 +96,7 @@ def test_ideal_fix_is_the_antenna_position() -> None:
     world = World(load_track("trackdrive"), WorldConfig(sensors="ideal"))
     world.set_command(0.1, 2.0)
     for _ in range(300):
-        for m in world.step():
+        for m in world.step().messages:
             if isinstance(m, NavSatFix):
                 x, y = gps_to_local_cartesian(m.latitude, m.longitude)
                 antenna = world.state.antenna_pose()

@@ -16,7 +16,7 @@ def test_ideal_gyro_integrates_to_the_true_heading_change() -> None:
     world.set_command(0.3, 2.0)
     total = 0.0
     for _ in range(800):  # 4 s of a tightening turn
-        for m in world.step():
+        for m in world.step().messages:
             if isinstance(m, Imu) and m.header.stamp > 0.0:
                 total += m.yaw_rate * 0.01
     yaw1 = world.state.antenna_pose().yaw
@@ -33,7 +33,7 @@ def test_ideal_wheel_speed_is_the_positions_own_speed() -> None:
     poses = {0: world.state.antenna_pose()}
     speeds: dict[int, float] = {}
     for k in range(1, 301):  # 1.5 s
-        for m in world.step():
+        for m in world.step().messages:
             if isinstance(m, WheelSpeed):
                 speeds[round(m.header.stamp / world.dt)] = m.speed
         poses[k] = world.state.antenna_pose()
@@ -60,7 +60,7 @@ def test_ideal_accelerometer_integrates_to_the_positions_velocity_change() -> No
     for k in range(1, 1402):
         if k == 600:
             world.set_command(0.12, 0.3)
-        samples += [m for m in world.step() if isinstance(m, Imu)]
+        samples += [m for m in world.step().messages if isinstance(m, Imu)]
         poses[k] = world.state.antenna_pose()
     dt = world.dt
 

@@ -1,0 +1,127 @@
+"""The car's localization: measurements in, the frame tree out (seed 000).
+
+One :class:`Localizer` per car wires the seed's localization nodes into one
+frame tree, in one of three modes (``LOCALIZATION_MODES``):
+
+- ``fused`` (default): every measurement goes into the fusion EKF
+  (``localization.ekf``); the broadcaster publishes its estimate.
+- ``raw``: the seed as written: ``/ublox_gps_node/fix`` ->
+  ``gps_to_local_cartesian`` -> ``/local_xy``, and ``/global_yaw``, cached
+  by the broadcaster.
+- ``truth``: the broadcaster publishes the true pose the caller passes (a
+  baseline and a debugging aid; the only mode that reads the truth).
+
+In every mode each fix also becomes a ``/local_xy`` point, and the
+broadcaster publishes ``reference -> gps_antenna`` on its 20 Hz grid and
+``gps_antenna -> os_sensor`` once (``localization.broadcaster``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from conesim.core.geodesy import DEFAULT_ORIGIN, ReferenceOrigin
+from conesim.core.messages import (
+    FRAME_GPS_ANTENNA,
+    FRAME_REFERENCE,
+    HeadingStamped,
+    Message,
+    NavSatFix,
+    PointStamped,
+)
+from conesim.core.pose import Pose2D
+from conesim.localization.broadcaster import BroadcasterConfig, VehicleTfBroadcaster
+from conesim.localization.ekf import EkfConfig, Estimate, FusionEkf
+from conesim.localization.frames import LATEST, Buffer, TransformError, TransformStamped
+from conesim.localization.gps_to_local import GpsToLocalCartesian
+from conesim.localization.modes import LOCALIZATION_MODES, LocalizationMode
+
+
+@dataclass(frozen=True, slots=True)
+class LocalizationStep:
+    """What localization passed on in one tick.
+
+    Attributes:
+        local_xy: the ``/local_xy`` points made from this tick's fixes.
+        transform: the ``reference -> gps_antenna`` transform broadcast, or None.
+    """
+
+    local_xy: list[PointStamped]
+    transform: TransformStamped | None
+
+
+class Localizer:
+    """GPS-to-local, the fusion EKF and the TF broadcaster around one frame tree.
+
+    Args:
+        mode: ``fused``, ``raw`` or ``truth``.
+        ekf: the filter's settings (``fused`` mode; see ``ekf.for_profile``).
+        origin: the geodetic origin of ``reference``.
+        broadcaster: the broadcaster's rate and frame names (its mode is ``mode``).
+
+    Attributes:
+        frames: the frame tree (tf2's buffer) the car's software reads.
+        ekf: the fusion filter in ``fused`` mode, else None.
+        broadcaster: the vehicle TF broadcaster.
+    """
+
+    def __init__(
+        self,
+        mode: str = "fused",
+        ekf: EkfConfig | None = None,
+        origin: ReferenceOrigin = DEFAULT_ORIGIN,
+        broadcaster: BroadcasterConfig | None = None,
+    ) -> None:
+        if mode not in LOCALIZATION_MODES:
+            raise ValueError(
+                f"unknown localization mode {mode!r}; allowed: {list(LOCALIZATION_MODES)}"
+            )
+        self.mode = LocalizationMode(mode)
+        self.frames = Buffer()
+        self.ekf = FusionEkf(ekf) if self.mode is LocalizationMode.FUSED else None
+        self._gps_to_local = GpsToLocalCartesian(origin)
+        config = dataclasses.replace(broadcaster or BroadcasterConfig(), mode=self.mode)
+        self.broadcaster = VehicleTfBroadcaster(self.frames, config, ekf=self.ekf)
+
+    def step(self, t: float, messages: list[Message], truth: Pose2D) -> LocalizationStep:
+        """Handle the messages delivered at ``t`` [s], then broadcast if due.
+
+        Args:
+            t: the tick's time [s].
+            messages: the measurements delivered now, in stamp order.
+            truth: the antenna's true pose now (published in ``truth`` mode only).
+        """
+        points = self.handle(messages)
+        return LocalizationStep(points, self.broadcaster.step(t, truth))
+
+    def handle(self, messages: list[Message]) -> list[PointStamped]:
+        """Each message to the seed's nodes and the filter; the ``/local_xy`` points made."""
+        points: list[PointStamped] = []
+        broadcaster = self.broadcaster
+        ekf = self.ekf
+        for msg in messages:
+            if isinstance(msg, NavSatFix):
+                point = self._gps_to_local(msg)
+                if point is not None:
+                    points.append(point)
+                    broadcaster.on_local_xy(point)
+            elif isinstance(msg, HeadingStamped):
+                broadcaster.on_global_yaw(msg)
+            if ekf is not None:
+                ekf.process(msg)
+        return points
+
+    def published_pose(self) -> Pose2D | None:
+        """``reference -> gps_antenna`` as the frame tree holds it now (the last
+        broadcast), or None before the first one."""
+        try:
+            return self.frames.lookup_pose2d(FRAME_REFERENCE, FRAME_GPS_ANTENNA, LATEST)
+        except TransformError:
+            return None
+
+    def estimate(self, t: float) -> Estimate | None:
+        """The filter's estimate at ``t`` [s] (``fused`` mode, once initialised), else None."""
+        if self.ekf is None or not self.ekf.initialised:
+            return None
+        return self.ekf.estimate(t)
