@@ -103,8 +103,10 @@ def motion_terms(x, u, dt, g, h, params, out, f, gu, qm):  # noqa: PLR0917
         dt: interval [s], > 0.
         g: index of gps_bias_e, or -1 without that state.
         h: index of heading_bias, or -1 without that state.
-        params: (gps_bias_tau, heading_bias_tau, accel density^2, yaw density^2,
-            gyro walk^2, scale walk^2, gps_bias_sigma^2, heading_bias_sigma^2).
+        params: (8,): gps_bias_tau [s], heading_bias_tau [s], q_a = accel density^2
+            [m^2/s^3], q_w = yaw density^2 [rad^2/s], gyro walk^2 [rad^2/s^3],
+            scale walk^2 [1/s], gps_bias_sigma^2 [m^2], heading_bias_sigma^2 [rad^2]
+            (indices ``GPS_TAU`` ... ``HEADING_VAR``).
         out: (n, 1), receives x' (yaw unwrapped); entries the model leaves alone are copied.
         f: (n, n), identity where the model has no entry; the entries are overwritten.
         gu: (n, 3), zero below row vy; rows x..vy are overwritten.
