@@ -12,8 +12,10 @@ Usage::
     if ekf.initialised:
         est = ekf.estimate(t)     # Estimate: pose, speed, yaw rate, covariances
 
-Modules: :mod:`.model` (state, motion and observation models, Jacobians; the
-state is argued there), :mod:`.config` (settings and per-profile defaults),
+Modules: :mod:`.model` (the state, argued there; the motion model's settings
+and typed call), :mod:`.kernels` (the motion model, compiled, with its
+derivation and Jacobians), :mod:`.observation` (h(x) and H of each sensor),
+:mod:`.config` (settings and per-profile defaults),
 :mod:`.measurements` (message checks), :mod:`.history` (late measurements),
 :mod:`.filter` (the filter), :mod:`.estimate` (its output), :mod:`.health`
 (rejection counters), :mod:`.synthetic` (a synthetic car for consistency tests

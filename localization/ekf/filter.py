@@ -2,7 +2,10 @@
 
 State and models: :mod:`localization.ekf.model` (the antenna pose, body
 velocity, gyro bias, wheel-speed scale and optional Gauss-Markov sensor
-errors; the IMU is the input). How filterpy is used, given its pitfalls
+errors; the IMU is the input), the motion model
+:func:`localization.ekf.kernels.motion_terms` (through
+:class:`~localization.ekf.model.MotionStep`) and the observation models
+:mod:`localization.ekf.observation`. How filterpy is used, given its pitfalls
 (REFERENCES.md, "filterpy 2.0.0"):
 
 * ``x`` is (n, 1) and every ``z`` is (m, 1), never 1-D.
@@ -43,8 +46,9 @@ and every late one replays a few more), with the same numbers as the plain
 formulation (``tests/localization/test_ekf_regression.py``):
 
 * predict: x', F and Q in one pass over floats (:class:`~.model.MotionStep`);
-* update: GPS and heading Jacobians built once; h(x), the residual and the
-  NIS on floats; the gate's residual is the one handed to filterpy;
+* update: the constant GPS and heading Jacobians built once (by their
+  observation models' functions); the NIS on floats; the gate's residual is
+  the one handed to filterpy;
 * snapshots share the filter's arrays instead of copying them: filterpy
   replaces ``x`` and ``P`` on every predict and update, this module writes
   only into the arrays one has just made (the yaw wrap), and a snapshot makes
@@ -72,7 +76,6 @@ from numpy.typing import NDArray
 from scipy.stats import chi2
 
 from conesim.core.messages import Message
-from conesim.core.pose import wrap_angle
 from conesim.localization.ekf import kernels
 from conesim.localization.ekf import model as m
 from conesim.localization.ekf.config import EkfConfig
@@ -80,6 +83,7 @@ from conesim.localization.ekf.estimate import Estimate
 from conesim.localization.ekf.health import Health, RejectReason, Sensor, UpdateResult
 from conesim.localization.ekf.history import Entry, History, Snapshot, order_key
 from conesim.localization.ekf.measurements import InvalidMessage, Measurement, to_measurement
+from conesim.localization.ekf.observation import OBSERVATIONS
 
 ESTIMATE_CACHE_SIZE = 8  # estimates kept (per stamp) for repeated calls
 
@@ -96,11 +100,6 @@ NO_IMU_INPUT.flags.writeable = False  # read-only as every sample's (one kernel 
 
 class NotInitialisedError(RuntimeError):
     """The filter has no state yet (it waits for a fix and a heading)."""
-
-
-def heading_residual(a: FloatArray, b: FloatArray) -> FloatArray:
-    """``a - b`` for headings, wrapped into [-pi, pi) [rad]."""
-    return np.asarray(wrap_angle(np.subtract(a, b)), dtype=float)
 
 
 def _nis(y: FloatArray, s: FloatArray) -> float:
@@ -175,8 +174,11 @@ class FusionEkf:
         kernels.warm_up(self._step, NO_IMU_INPUT, NO_IMU_COV)
         self._gates = {dof: float(chi2.ppf(self.config.gate_probability, dof)) for dof in (1, 2)}
         self._ekf = _FilterpyEkf(self.layout.n)
-        self._h_position = _freeze(m.jacob_h_position(self._ekf.x, self.layout))  # constant
-        self._h_heading = _freeze(m.jacob_h_heading(self._ekf.x, self.layout))  # constant
+        self._constant_h = {  # H of the sensors whose H does not depend on the state
+            sensor: _freeze(obs.jacobian(self._ekf.x, self.layout))
+            for sensor, obs in OBSERVATIONS.items()
+            if obs.constant
+        }
         self._history: History | None = None
         self._deferred: list[Entry] = []
         self.reset()
@@ -510,29 +512,15 @@ class FusionEkf:
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(h(x), H, residual z - h(x), wrapped for the heading) of a measurement.
 
-        The same values as :mod:`.model`'s ``h_*`` and ``jacob_h_*`` and
-        :func:`heading_residual`, on floats; the GPS and heading H are constant.
+        From the sensor's observation model (:mod:`.observation`); a constant
+        H is the one built when the filter was.
         """
-        layout = self.layout
-        if meas.sensor == Sensor.GPS:
-            east, north = x.item(m.X), x.item(m.Y)
-            g = layout.gps_bias_index
-            if g is not None:
-                east, north = east + x.item(g), north + x.item(g + 1)
-            y = np.array([[meas.z.item(0) - east], [meas.z.item(1) - north]])
-            return np.array([[east], [north]]), self._h_position, y
-        if meas.sensor == Sensor.HEADING:
-            yaw = x.item(m.YAW)
-            k = layout.heading_bias_index
-            if k is not None:
-                yaw += x.item(k)
-            y = np.array([[m.wrap_yaw(meas.z.item(0) - yaw)]])
-            return np.array([[yaw]]), self._h_heading, y
-        scale, vx = x.item(m.WHEEL_SCALE), x.item(m.VX)
-        jac = np.zeros((1, layout.n))
-        jac[0, m.VX], jac[0, m.WHEEL_SCALE] = scale, vx
-        speed = scale * vx
-        return np.array([[speed]]), jac, np.array([[meas.z.item(0) - speed]])
+        obs = OBSERVATIONS[meas.sensor]
+        hx = obs.h(x, self.layout)
+        jac = self._constant_h.get(meas.sensor)
+        if jac is None:
+            jac = obs.jacobian(x, self.layout)
+        return hx, jac, obs.residual(meas.z, hx)
 
     def _tidy(self) -> None:
         """Wrap yaw and re-symmetrise P after a predict or an update (both new arrays)."""

@@ -1,31 +1,30 @@
-"""Compiled kernels (numba) for the fusion EKF's motion step and covariance tidying.
+"""Compiled kernels (numba) of the fusion EKF: the motion model, and P's symmetrisation.
 
-Why: :class:`~localization.ekf.model.MotionStep` runs for every IMU sample,
-every replayed one and every estimate ahead (about 4 per env step, more with
-late fixes). Its arithmetic is a few dozen floats, but in Python each of the
-~60 float results costs an interpreter round trip and a numpy item store
-(about 8 us per call on the 2-core development machine). :func:`motion_terms`
-does the same work in one compiled call: x' = f(x, u, dt), the entries of F,
-of the input Jacobian G and of Q's model terms, written into arrays the
-caller owns. The two matrix products of Q (G Sigma G') stay with numpy in the
-caller: numpy's BLAS uses fused multiply-adds, which a loop here would not
-reproduce bit for bit. :func:`symmetrised` is the ``0.5 * (P + P')`` the
-filter applies after every predict and update, in one call instead of three
-numpy operations.
+:func:`motion_terms` is the motion model, derived in its docstring: x' =
+f(x, u, dt), the entries of F, of the input Jacobian G and of Q's model terms
+in one compiled pass over floats, written into arrays the caller owns
+(:class:`~localization.ekf.model.MotionStep` is its one typed call). Compiled
+because it runs for every IMU sample, every replayed one and every estimate
+ahead, and in Python each of its few dozen float results would cost an
+interpreter round trip and a numpy item store. The two matrix products of Q
+(G Sigma G') stay with numpy in the caller: numpy's BLAS uses fused
+multiply-adds, which a loop here would not reproduce bit for bit.
+:func:`symmetrised` is the ``0.5 * (P + P')`` the filter applies after every
+predict and update, in one call instead of three numpy operations.
 
-Same numbers: the kernel does the same IEEE operations in the same order as
-``MotionStep``'s Python did (and as ``motion_model``, ``jacob_f`` and
-``process_noise``; ``tests/localization/test_ekf_regression.py`` compares
-exactly). No ``fastmath``, so no reassociation or contraction into fused
-multiply-adds; ``math.sin``/``cos``/``exp``/``pow`` call the C library's
-functions, as Python's ``math`` does (``dt ** 3`` is written ``math.pow(dt,
-3.0)``, Python's float power, not numba's repeated multiplication).
+Exact arithmetic: no ``fastmath``, so no reassociation or contraction into
+fused multiply-adds; ``math.sin``/``cos``/``exp``/``pow`` call the C
+library's functions, as Python's ``math`` does (``dt ** 3`` is written
+``math.pow(dt, 3.0)``, Python's float power, not numba's repeated
+multiplication). So the kernel gives, bit for bit, the numbers of the
+readable numpy formulation it was checked against; the tests keep that
+formulation (``tests/localization/ekf_reference.py``) and compare exactly.
 
 Caching as ``planner.kernels`` (``cache=True``: machine code is written next
 to this file, or under ``NUMBA_CACHE_DIR`` or the user's cache directory;
 with no writable directory the kernel compiles in each process, with a
-warning). Compiling takes a few seconds from a cold cache, loading it
-from the cache a fraction of a second.
+warning). A cold cache compiles for seconds; a warm one loads in a
+fraction of that.
 """
 
 from __future__ import annotations
@@ -53,7 +52,50 @@ _compiled = cached_njit(_probe, "conesim.localization.ekf.kernels")
 
 @_compiled
 def motion_terms(x, u, dt, g, h, params, out, f, gu, qm):  # noqa: PLR0917
-    """x' into ``out``, and F, G (rows x..vy) and Q's model terms into ``f``, ``gu``, ``qm``.
+    """The motion model: x' into ``out``; F, G and Q's model terms into ``f``, ``gu``, ``qm``.
+
+    The IMU is the input u = (w_m, a_x, a_y), held over the interval dt (the
+    state's table: :mod:`localization.ekf.model`). With w = w_m - gyro_bias,
+    R(a) the 2D rotation and S = [[0, -1], [1, 0]] (so dR(a)/da = R(a) S), the
+    body velocity rotates with the car and is pushed by the specific force
+    a = (a_x, a_y); in ``reference`` the velocity is V = R(yaw) v and
+    dV/dt = R(yaw) a. The steps below are the code's sections, in order.
+
+    1. x' = f(x, u, dt), integrated with yaw at the interval's midpoint for
+       the acceleration (second order)::
+
+           p'   = p + dt R(yaw) v + dt^2/2 R(yaw + w dt/2) a
+           yaw' = yaw + w dt
+           v'   = R(-w dt) v + dt R(-w dt/2) a
+           gyro_bias', wheel_scale' = gyro_bias, wheel_scale       (random walks)
+           gps_bias' = phi_g gps_bias,  heading_bias' = phi_h heading_bias
+           phi = exp(-dt/tau)                                       (Gauss-Markov)
+
+    2. F = df/dx (identity except)::
+
+           dp'/dyaw         = dt R(yaw) S v + dt^2/2 R(yaw + w dt/2) S a
+           dp'/dv           = dt R(yaw)
+           dp'/dgyro_bias   = -dt^3/4 R(yaw + w dt/2) S a
+           dyaw'/dgyro_bias = -dt
+           dv'/dv           = R(-w dt)
+           dv'/dgyro_bias   = dt R(-w dt) S v + dt^2/2 R(-w dt/2) S a
+           dgps_bias'/dgps_bias = phi_g I,  dheading_bias'/dheading_bias = phi_h
+
+    3. G = df/du (w_m enters as -gyro_bias, so dG/dw_m = -dF/dgyro_bias;
+       rows below vy are zero)::
+
+           dp'/dw_m   = dt^3/4 R(yaw + w dt/2) S a     dp'/da = dt^2/2 R(yaw + w dt/2)
+           dyaw'/dw_m = dt
+           dv'/dw_m   = -dv'/dgyro_bias                dv'/da = dt R(-w dt/2)
+
+    4. Q's model terms. The process noise is Q = G (Sigma_u T / dt) G^T +
+       Q_model (the caller adds the first term), where Sigma_u is the IMU's
+       stated per-sample variance at its period T (a white density of
+       sigma^2 T, so splitting an IMU interval at a measurement keeps the
+       total), and Q_model adds white acceleration (density q_a:
+       Q_pp = q_a dt^3/3 I, Q_pv = q_a dt^2/2 R(yaw), Q_vv = q_a dt I), white
+       yaw rate (q_w dt), the bias random walks (K^2 dt) and the exact
+       Gauss-Markov terms sigma^2 (1 - phi^2).
 
     Args:
         x: state, (n, 1).
@@ -61,8 +103,10 @@ def motion_terms(x, u, dt, g, h, params, out, f, gu, qm):  # noqa: PLR0917
         dt: interval [s], > 0.
         g: index of gps_bias_e, or -1 without that state.
         h: index of heading_bias, or -1 without that state.
-        params: (gps_bias_tau, heading_bias_tau, accel density^2, yaw density^2,
-            gyro walk^2, scale walk^2, gps_bias_sigma^2, heading_bias_sigma^2).
+        params: (8,): gps_bias_tau [s], heading_bias_tau [s], q_a = accel density^2
+            [m^2/s^3], q_w = yaw density^2 [rad^2/s], gyro walk^2 [rad^2/s^3],
+            scale walk^2 [1/s], gps_bias_sigma^2 [m^2], heading_bias_sigma^2 [rad^2]
+            (indices ``GPS_TAU`` ... ``HEADING_VAR``).
         out: (n, 1), receives x' (yaw unwrapped); entries the model leaves alone are copied.
         f: (n, n), identity where the model has no entry; the entries are overwritten.
         gu: (n, 3), zero below row vy; rows x..vy are overwritten.
@@ -91,7 +135,7 @@ def motion_terms(x, u, dt, g, h, params, out, f, gu, qm):  # noqa: PLR0917
     phi_g = math.exp(-dt / params[GPS_TAU]) if g >= 0 else 1.0
     phi_h = math.exp(-dt / params[HEADING_TAU]) if h >= 0 else 1.0
 
-    # -- x' = f(x, u, dt) --
+    # -- 1. x' = f(x, u, dt) --
     for i in range(n):
         out[i, 0] = x[i, 0]
     out[0, 0] = px + (dt * vex + half * aex)
@@ -105,7 +149,7 @@ def motion_terms(x, u, dt, g, h, params, out, f, gu, qm):  # noqa: PLR0917
     if h >= 0:
         out[h, 0] *= phi_h
 
-    # -- F = df/dx (identity elsewhere) --
+    # -- 2. F = df/dx (identity elsewhere) --
     wdt = w * dt
     cw, sw = math.cos(wdt), math.sin(wdt)
     f[0, 2] = dt * sv0 + half * sa0
@@ -122,7 +166,7 @@ def motion_terms(x, u, dt, g, h, params, out, f, gu, qm):  # noqa: PLR0917
     if h >= 0:
         f[h, h] = phi_h
 
-    # -- G = df/du, rows x..vy --
+    # -- 3. G = df/du, rows x..vy --
     hw = 0.5 * w * dt
     ch, sh = math.cos(hw), math.sin(hw)
     gu[0, 0] = 0.25 * cube * sa0
@@ -132,7 +176,7 @@ def motion_terms(x, u, dt, g, h, params, out, f, gu, qm):  # noqa: PLR0917
     gu[3, 0], gu[4, 0] = -dv0, -dv1
     gu[3, 1], gu[3, 2], gu[4, 1], gu[4, 2] = dt * ch, dt * sh, -dt * sh, dt * ch
 
-    # -- Q's model terms --
+    # -- 4. Q's model terms --
     qa = params[QA]
     if qa > 0.0:
         pp = qa * cube / 3.0
@@ -179,7 +223,7 @@ def warm_up(step: Any, u: Any, u_cov: Any) -> None:
     """Call each kernel once, as the filter will (read-only state and input).
 
     numba initialises itself and loads (or compiles) the machine code on a
-    kernel's first call: about 0.3 s in a process that has used no numba
+    kernel's first call, which is slow in a process that has used no numba
     yet. Called when a filter is built, so that this happens there rather
     than in its first predict (inside a timed loop, say). ``step`` is a
     ``MotionStep`` (its arrays are overwritten by every call, so the call

@@ -1,4 +1,4 @@
-"""The fusion EKF's state, motion model and observation models, with Jacobians.
+"""The fusion EKF's state, its layout, and the motion model's settings and typed call.
 
 State: the pose of ``gps_antenna`` in ``reference``, plus what the sensors need
 ----------------------------------------------------------------------------------
@@ -43,58 +43,14 @@ NEES near 55; REFERENCES.md, "Filter consistency"). With the bias in the state
 the covariance stays honest; the bias itself is not observable from GPS alone,
 so it still limits the absolute position error (only a map would remove it).
 
-Motion model (IMU as input u = (w_m, a_x, a_y), held over each interval dt)
-----------------------------------------------------------------------------
-With w = w_m - gyro_bias, R(a) the 2D rotation and S = [[0, -1], [1, 0]]
-(so dR(a)/da = R(a) S), the body velocity rotates with the car and is pushed
-by the specific force a = (a_x, a_y); in ``reference`` the velocity is
-V = R(yaw) v and dV/dt = R(yaw) a. Integrated with yaw at the interval's
-midpoint for the acceleration (second order)::
-
-    p'   = p + dt R(yaw) v + dt^2/2 R(yaw + w dt/2) a
-    yaw' = yaw + w dt
-    v'   = R(-w dt) v + dt R(-w dt/2) a
-    gyro_bias', wheel_scale' = gyro_bias, wheel_scale       (random walks)
-    gps_bias' = phi_g gps_bias,  heading_bias' = phi_h heading_bias,  phi = exp(-dt/tau)
-
-Jacobian F = df/dx (identity except)::
-
-    dp'/dyaw        = dt R(yaw) S v + dt^2/2 R(yaw + w dt/2) S a
-    dp'/dv          = dt R(yaw)
-    dp'/dgyro_bias  = -dt^3/4 R(yaw + w dt/2) S a
-    dyaw'/dgyro_bias = -dt
-    dv'/dv          = R(-w dt)
-    dv'/dgyro_bias  = dt R(-w dt) S v + dt^2/2 R(-w dt/2) S a
-    dgps_bias'/dgps_bias = phi_g I,  dheading_bias'/dheading_bias = phi_h
-
-Input Jacobian G = df/du (w_m enters as -gyro_bias, so dG/dw_m = -dF/dgyro_bias)::
-
-    dp'/dw_m = dt^3/4 R(yaw + w dt/2) S a     dp'/da = dt^2/2 R(yaw + w dt/2)
-    dyaw'/dw_m = dt
-    dv'/dw_m = -dv'/dgyro_bias                dv'/da = dt R(-w dt/2)
-
-Process noise: Q = G (Sigma_u T / dt) G^T + Q_model, where Sigma_u is the
-IMU's stated per-sample variance at its period T (a white density of
-sigma^2 T, so splitting an IMU interval at a measurement keeps the total),
-and Q_model adds white acceleration (density q_a: Q_pp = q_a dt^3/3 I,
-Q_pv = q_a dt^2/2 R(yaw), Q_vv = q_a dt I), white yaw-rate (q_w dt), the
-bias random walks (K^2 dt) and the exact Gauss-Markov terms sigma^2 (1 - phi^2).
-
-Observation models (z = h(x) + noise), with H = dh/dx
------------------------------------------------------
-* GPS position (the antenna; no lever arm): h = p (+ gps_bias), H = [I2 0 .. (I2)].
-* Heading (dual antenna, ``/global_yaw``): h = yaw (+ heading_bias),
-  H = e_yaw (+ e_heading_bias); its residual is wrapped into [-pi, pi).
-* Wheel speed: h = wheel_scale * vx, H[vx] = wheel_scale, H[wheel_scale] = vx.
-
-Written for speed: :class:`MotionStep` is the filter's hot path (every IMU
-sample, every replay, every estimate ahead). It evaluates :func:`motion_model`,
-:func:`jacob_f` and :func:`process_noise` in one compiled pass over floats
-(:func:`localization.ekf.kernels.motion_terms`, numba), with the same
-expressions in the same order (so the same numbers, bit for bit), sharing the
-trigonometry and writing F, G and Q's model terms into arrays it owns; only
-Q's G Sigma G' is left to numpy (its BLAS products). The functions above stay
-the readable reference (the tests check the two agree).
+Motion model and observation models
+-----------------------------------
+The motion model (the IMU as the input, held over each interval) is the
+compiled kernel :func:`localization.ekf.kernels.motion_terms`, whose
+docstring derives x' = f(x, u, dt), the Jacobians F = df/dx and G = df/du and
+the process noise Q; :class:`MotionStep` is its one typed Python call, and
+:class:`ProcessModel` its settings. The observation models h(x) and their
+Jacobians H are :mod:`localization.ekf.observation`.
 """
 
 from __future__ import annotations
@@ -127,18 +83,6 @@ _TWO_PI: Final = 2.0 * math.pi
 def wrap_yaw(angle: float) -> float:
     """:func:`localization.pose.wrap_angle` on a float, without numpy: the same arithmetic, bits."""
     return (angle + math.pi) % _TWO_PI - math.pi
-
-
-def rot(angle: float) -> FloatArray:
-    """The (2, 2) rotation by ``angle`` [rad], counter-clockwise."""
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s], [s, c]])
-
-
-def _turn(angle: float, px: float, py: float) -> tuple[float, float]:
-    """R(angle) (px, py), on floats (the hot path avoids small numpy arrays)."""
-    c, s = math.cos(angle), math.sin(angle)
-    return c * px - s * py, s * px + c * py
 
 
 @dataclass(frozen=True, slots=True)
@@ -204,198 +148,15 @@ class ProcessModel:
     heading_bias_tau: float = math.inf  # [s]
 
 
-def _unpack(x: FloatArray, u: FloatArray) -> tuple[float, float, float, float, float, float]:
-    """(yaw, w = w_m - gyro_bias, vx, vy, ax, ay) as floats."""
-    return (
-        float(x[YAW, 0]),
-        float(u[0]) - float(x[GYRO_BIAS, 0]),
-        float(x[VX, 0]),
-        float(x[VY, 0]),
-        float(u[1]),
-        float(u[2]),
-    )
-
-
-def motion_model(x: FloatArray, u: FloatArray, dt: float, model: ProcessModel) -> FloatArray:
-    """Propagate the state over ``dt`` with the IMU input held (module docstring).
-
-    Args:
-        x: state, (n, 1).
-        u: IMU input (w_m [rad/s], a_x [m/s^2], a_y [m/s^2]), (3,).
-        dt: interval [s], >= 0.
-        model: layout and noise settings.
-
-    Returns:
-        The propagated state, (n, 1); yaw is not wrapped here (the filter wraps).
-    """
-    yaw, w, vx, vy, ax, ay = _unpack(x, u)
-    half = 0.5 * dt * dt
-    vex, vey = _turn(yaw, vx, vy)
-    aex, aey = _turn(yaw + 0.5 * w * dt, ax, ay)
-    rvx, rvy = _turn(-w * dt, vx, vy)
-    rax, ray = _turn(-0.5 * w * dt, ax, ay)
-    out = x.copy()
-    out[X, 0] += dt * vex + half * aex
-    out[Y, 0] += dt * vey + half * aey
-    out[YAW, 0] = yaw + w * dt
-    out[VX, 0] = rvx + dt * rax
-    out[VY, 0] = rvy + dt * ray
-    layout = model.layout
-    if layout.gps_bias:
-        g = N_CORE
-        out[g : g + 2, 0] *= math.exp(-dt / model.gps_bias_tau)
-    h = layout.heading_bias_index
-    if h is not None:
-        out[h, 0] *= math.exp(-dt / model.heading_bias_tau)
-    return out
-
-
-def _dv_dgyro_bias(
-    w: float, v: tuple[float, float], a: tuple[float, float], dt: float
-) -> tuple[float, float]:
-    """dv'/dgyro_bias = dt R(-w dt) S v + dt^2/2 R(-w dt/2) S a (S (px, py) = (-py, px))."""
-    bx, by = _turn(-w * dt, -v[1], v[0])
-    cx, cy = _turn(-0.5 * w * dt, -a[1], a[0])
-    half = 0.5 * dt * dt
-    return dt * bx + half * cx, dt * by + half * cy
-
-
-def jacob_f(x: FloatArray, u: FloatArray, dt: float, model: ProcessModel) -> FloatArray:
-    """F = d motion_model / dx, (n, n) (formulas in the module docstring)."""
-    yaw, w, vx, vy, ax, ay = _unpack(x, u)
-    c, s = math.cos(yaw), math.sin(yaw)
-    mid = yaw + 0.5 * w * dt
-    sv = _turn(yaw, -vy, vx)  # R(yaw) S v
-    sa = _turn(mid, -ay, ax)  # R(mid) S a
-    half = 0.5 * dt * dt
-    cw, sw = math.cos(w * dt), math.sin(w * dt)
-    f = np.eye(model.layout.n)
-    f[X, YAW] = dt * sv[0] + half * sa[0]
-    f[Y, YAW] = dt * sv[1] + half * sa[1]
-    f[X, VX], f[X, VY], f[Y, VX], f[Y, VY] = dt * c, -dt * s, dt * s, dt * c
-    f[X, GYRO_BIAS] = -0.25 * dt**3 * sa[0]
-    f[Y, GYRO_BIAS] = -0.25 * dt**3 * sa[1]
-    f[YAW, GYRO_BIAS] = -dt
-    f[VX, VX], f[VX, VY], f[VY, VX], f[VY, VY] = cw, sw, -sw, cw  # R(-w dt)
-    f[VX, GYRO_BIAS], f[VY, GYRO_BIAS] = _dv_dgyro_bias(w, (vx, vy), (ax, ay), dt)
-    layout = model.layout
-    if layout.gps_bias:
-        g = N_CORE
-        phi = math.exp(-dt / model.gps_bias_tau)
-        f[g, g] = f[g + 1, g + 1] = phi
-    h = layout.heading_bias_index
-    if h is not None:
-        f[h, h] = math.exp(-dt / model.heading_bias_tau)
-    return f
-
-
-def jacob_u(x: FloatArray, u: FloatArray, dt: float, model: ProcessModel) -> FloatArray:
-    """G = d motion_model / du, (n, 3) (formulas in the module docstring)."""
-    yaw, w, vx, vy, ax, ay = _unpack(x, u)
-    mid = yaw + 0.5 * w * dt
-    cm, sm = math.cos(mid), math.sin(mid)
-    sa = _turn(mid, -ay, ax)  # R(mid) S a
-    half = 0.5 * dt * dt
-    ch, sh = math.cos(0.5 * w * dt), math.sin(0.5 * w * dt)
-    dvx, dvy = _dv_dgyro_bias(w, (vx, vy), (ax, ay), dt)
-    g = np.zeros((model.layout.n, 3))
-    g[X, 0] = 0.25 * dt**3 * sa[0]
-    g[Y, 0] = 0.25 * dt**3 * sa[1]
-    g[X, 1], g[X, 2], g[Y, 1], g[Y, 2] = half * cm, -half * sm, half * sm, half * cm
-    g[YAW, 0] = dt
-    g[VX, 0], g[VY, 0] = -dvx, -dvy
-    g[VX, 1], g[VX, 2], g[VY, 1], g[VY, 2] = dt * ch, dt * sh, -dt * sh, dt * ch  # dt R(-w dt/2)
-    return g
-
-
-def process_noise(
-    x: FloatArray, u: FloatArray, u_cov: FloatArray, dt: float, model: ProcessModel
-) -> FloatArray:
-    """Q over ``dt``, (n, n): the IMU's noise through G plus the model terms.
-
-    Args:
-        x: state, (n, 1).
-        u: IMU input, (3,).
-        u_cov: the IMU's stated per-sample covariance of u, (3, 3).
-        dt: interval [s], > 0.
-        model: layout and noise settings.
-    """
-    g = jacob_u(x, u, dt, model)
-    q = g @ (u_cov * (model.imu_period / dt)) @ g.T
-    qa = model.accel_model_density**2
-    if qa > 0.0:
-        q[X : Y + 1, X : Y + 1] += qa * dt**3 / 3.0 * np.eye(2)
-        pv = qa * dt * dt / 2.0 * rot(float(x[YAW, 0]))
-        q[X : Y + 1, VX : VY + 1] += pv
-        q[VX : VY + 1, X : Y + 1] += pv.T
-        q[VX : VY + 1, VX : VY + 1] += qa * dt * np.eye(2)
-    q[YAW, YAW] += model.yaw_model_density**2 * dt
-    q[GYRO_BIAS, GYRO_BIAS] += model.gyro_bias_walk**2 * dt
-    q[WHEEL_SCALE, WHEEL_SCALE] += model.wheel_scale_walk**2 * dt
-    layout = model.layout
-    if layout.gps_bias:
-        k = N_CORE
-        phi = math.exp(-dt / model.gps_bias_tau)
-        q[k, k] += model.gps_bias_sigma**2 * (1.0 - phi * phi)
-        q[k + 1, k + 1] += model.gps_bias_sigma**2 * (1.0 - phi * phi)
-    h = layout.heading_bias_index
-    if h is not None:
-        phi = math.exp(-dt / model.heading_bias_tau)
-        q[h, h] += model.heading_bias_sigma**2 * (1.0 - phi * phi)
-    return q
-
-
-def h_position(x: FloatArray, layout: StateLayout) -> FloatArray:
-    """Expected GPS position of the antenna in ``reference`` [m], (2, 1)."""
-    z = x[X : Y + 1].copy()
-    if layout.gps_bias:
-        z += x[N_CORE : N_CORE + 2]
-    return z
-
-
-def jacob_h_position(x: FloatArray, layout: StateLayout) -> FloatArray:
-    """H of :func:`h_position`, (2, n)."""
-    h = np.zeros((2, layout.n))
-    h[0, X] = h[1, Y] = 1.0
-    if layout.gps_bias:
-        h[0, N_CORE] = h[1, N_CORE + 1] = 1.0
-    return h
-
-
-def h_heading(x: FloatArray, layout: StateLayout) -> FloatArray:
-    """Expected heading [rad], (1, 1), not wrapped (the residual is)."""
-    z = x[YAW : YAW + 1].copy()
-    k = layout.heading_bias_index
-    if k is not None:
-        z += x[k : k + 1]
-    return z
-
-
-def jacob_h_heading(x: FloatArray, layout: StateLayout) -> FloatArray:
-    """H of :func:`h_heading`, (1, n)."""
-    h = np.zeros((1, layout.n))
-    h[0, YAW] = 1.0
-    k = layout.heading_bias_index
-    if k is not None:
-        h[0, k] = 1.0
-    return h
-
-
-def h_wheel_speed(x: FloatArray, layout: StateLayout) -> FloatArray:
-    """Expected wheel speed wheel_scale * vx [m/s], (1, 1)."""
-    return np.array([[x[WHEEL_SCALE, 0] * x[VX, 0]]])
-
-
-def jacob_h_wheel_speed(x: FloatArray, layout: StateLayout) -> FloatArray:
-    """H of :func:`h_wheel_speed`, (1, n)."""
-    h = np.zeros((1, layout.n))
-    h[0, VX] = x[WHEEL_SCALE, 0]
-    h[0, WHEEL_SCALE] = x[VX, 0]
-    return h
-
-
 class MotionStep:
-    """f(x, u, dt), F and Q of one interval, together (module docstring: written for speed).
+    """The motion model over one interval: x' = f(x, u, dt), F = df/dx and Q, together.
+
+    The one Python call of :func:`localization.ekf.kernels.motion_terms`
+    (whose docstring has the equations): it packs the settings for the kernel
+    once, checks the shapes the kernel does not, and adds Q's G Sigma G' with
+    numpy's BLAS products. Together in one call because this is the filter's
+    hot path (every IMU sample, every replay, every estimate ahead): x', F, G
+    and Q's model terms share their trigonometry.
 
     Args:
         model: layout and noise settings.
@@ -439,8 +200,8 @@ class MotionStep:
             dt: interval [s], > 0.
 
         Returns:
-            (x' (n, 1), new and unwrapped as from :func:`motion_model`; F (n, n),
-            an array this object overwrites on its next call; Q (n, n), new).
+            (x' (n, 1), new, yaw unwrapped (the filter wraps); F (n, n), an
+            array this object overwrites on its next call; Q (n, n), new).
         """
         n = self._f.shape[0]
         if x.shape != (n, 1) or u.shape != (3,):  # the kernel does not check bounds

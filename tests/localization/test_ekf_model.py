@@ -1,26 +1,24 @@
-"""The EKF's motion and observation models: Jacobians, zero motion, a circle, wrapping."""
+"""The EKF's motion model (MotionStep, the compiled kernel): Jacobians, zero motion, a circle."""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from functools import partial
 
 import numpy as np
 import pytest
-from numpy.typing import NDArray
 
 from conesim.localization.ekf import model as m
-from conesim.localization.ekf.filter import heading_residual
-from conesim.localization.ekf.model import ProcessModel, StateLayout
+from conesim.localization.ekf.model import MotionStep, ProcessModel, StateLayout
+from tests.localization.ekf_reference import (
+    LAYOUTS,
+    FloatArray,
+    layout_id,
+    numeric_jacobian,
+    random_state,
+)
 
-FloatArray = NDArray[np.float64]
-LAYOUTS = [
-    StateLayout(),
-    StateLayout(gps_bias=True),
-    StateLayout(heading_bias=True),
-    StateLayout(gps_bias=True, heading_bias=True),
-]
+NO_INPUT_NOISE = np.zeros((3, 3))
 
 
 def process_model(layout: StateLayout) -> ProcessModel:
@@ -38,78 +36,39 @@ def process_model(layout: StateLayout) -> ProcessModel:
     )
 
 
-def random_state(layout: StateLayout, rng: np.random.Generator) -> FloatArray:
-    x = rng.normal(size=(layout.n, 1))
-    x[m.YAW, 0] = rng.uniform(-3.0, 3.0)
-    x[m.VX, 0] = rng.uniform(2.0, 15.0)
-    x[m.GYRO_BIAS, 0] *= 0.01
-    x[m.WHEEL_SCALE, 0] = 1.0 + 0.01 * rng.normal()
-    return x
+def next_state(step: MotionStep, x: FloatArray, u: FloatArray, dt: float) -> FloatArray:
+    """x' alone."""
+    return step(x, u, NO_INPUT_NOISE, dt)[0]
 
 
-def numeric_jacobian(f: Callable[[FloatArray], FloatArray], x: FloatArray) -> FloatArray:
-    """Central differences, column by column."""
-    x = np.asarray(x, dtype=float)
-    flat = x.reshape(-1)
-    cols = []
-    for i in range(flat.size):
-        h = 1e-6 * max(1.0, abs(flat[i]))
-        up, down = flat.copy(), flat.copy()
-        up[i] += h
-        down[i] -= h
-        cols.append((f(up.reshape(x.shape)) - f(down.reshape(x.shape))).reshape(-1) / (2.0 * h))
-    return np.array(cols).T
-
-
-@pytest.mark.parametrize("layout", LAYOUTS, ids=lambda lay: "-".join(lay.names[7:]) or "core")
+@pytest.mark.parametrize("layout", LAYOUTS, ids=layout_id)
 @pytest.mark.parametrize("dt", [0.001, 0.01, 0.2])
 def test_jacob_f_matches_finite_differences(layout: StateLayout, dt: float) -> None:
-    """F = df/dx against central differences."""
+    """F = df/dx against central differences of x'."""
     rng = np.random.default_rng(0)
-    model = process_model(layout)
+    step = MotionStep(process_model(layout))
     for _ in range(5):
         x, u = random_state(layout, rng), rng.normal(size=3) * [0.8, 3.0, 8.0]
-        numeric = numeric_jacobian(partial(m.motion_model, u=u, dt=dt, model=model), x)
-        np.testing.assert_allclose(m.jacob_f(x, u, dt, model), numeric, atol=1e-7)
+        f = step(x, u, NO_INPUT_NOISE, dt)[1].copy()  # the step overwrites F on its next call
+        numeric = numeric_jacobian(partial(next_state, step, u=u, dt=dt), x)
+        np.testing.assert_allclose(f, numeric, atol=1e-7)
 
 
-@pytest.mark.parametrize("layout", LAYOUTS, ids=lambda lay: "-".join(lay.names[7:]) or "core")
+@pytest.mark.parametrize("layout", LAYOUTS, ids=layout_id)
 @pytest.mark.parametrize("dt", [0.001, 0.01, 0.2])
 def test_jacob_u_matches_finite_differences(layout: StateLayout, dt: float) -> None:
-    """G = df/du against central differences."""
+    """G = df/du (the kernel's, which MotionStep keeps for Q) against central differences."""
     rng = np.random.default_rng(1)
-    model = process_model(layout)
+    step = MotionStep(process_model(layout))
     for _ in range(5):
         x, u = random_state(layout, rng), rng.normal(size=3) * [0.8, 3.0, 8.0]
-        numeric = numeric_jacobian(partial(m.motion_model, x, dt=dt, model=model), u)
-        np.testing.assert_allclose(m.jacob_u(x, u, dt, model), numeric, atol=1e-7)
+        step(x, u, NO_INPUT_NOISE, dt)
+        g = step._g.copy()
+        numeric = numeric_jacobian(partial(next_state, step, x, dt=dt), u)
+        np.testing.assert_allclose(g, numeric, atol=1e-7)
 
 
-@pytest.mark.parametrize("layout", LAYOUTS, ids=lambda lay: "-".join(lay.names[7:]) or "core")
-@pytest.mark.parametrize(
-    ("h", "jac"),
-    [
-        (m.h_position, m.jacob_h_position),
-        (m.h_heading, m.jacob_h_heading),
-        (m.h_wheel_speed, m.jacob_h_wheel_speed),
-    ],
-    ids=["position", "heading", "wheel_speed"],
-)
-def test_observation_jacobians_match_finite_differences(
-    layout: StateLayout,
-    h: Callable[[FloatArray, StateLayout], FloatArray],
-    jac: Callable[[FloatArray, StateLayout], FloatArray],
-) -> None:
-    """H = dh/dx against central differences, and h has shape (m, 1)."""
-    rng = np.random.default_rng(2)
-    for _ in range(5):
-        x = random_state(layout, rng)
-        numeric = numeric_jacobian(lambda xx: h(xx, layout), x)
-        assert h(x, layout).shape == (numeric.shape[0], 1)
-        np.testing.assert_allclose(jac(x, layout), numeric, atol=1e-8)
-
-
-@pytest.mark.parametrize("layout", LAYOUTS, ids=lambda lay: "-".join(lay.names[7:]) or "core")
+@pytest.mark.parametrize("layout", LAYOUTS, ids=layout_id)
 def test_zero_motion_predict_leaves_the_state_unchanged(layout: StateLayout) -> None:
     """At rest, gyro reading its bias, no specific force: x' = x exactly (biases decay only)."""
     rng = np.random.default_rng(3)
@@ -120,18 +79,19 @@ def test_zero_motion_predict_leaves_the_state_unchanged(layout: StateLayout) -> 
     if layout.heading_bias_index is not None:
         x[layout.heading_bias_index, 0] = 0.0
     u = np.array([x[m.GYRO_BIAS, 0], 0.0, 0.0])
-    np.testing.assert_array_equal(m.motion_model(x, u, 0.5, process_model(layout)), x)
+    step = MotionStep(process_model(layout))
+    np.testing.assert_array_equal(step(x, u, NO_INPUT_NOISE, 0.5)[0], x)
 
 
 def circle_error(dt: float) -> float:
     """Largest state error after 1 s on a 10 m circle at 10 m/s (a_y = v w) in steps of dt."""
-    model = process_model(StateLayout())
+    step = MotionStep(process_model(StateLayout()))
     v, w = 10.0, 1.0
     x = np.zeros((7, 1))
     x[m.VX, 0], x[m.WHEEL_SCALE, 0] = v, 1.0
     u = np.array([w, 0.0, v * w])
     for _ in range(round(1.0 / dt)):
-        x = m.motion_model(x, u, dt, model)
+        x = step(x, u, NO_INPUT_NOISE, dt)[0]
     expected = [v / w * math.sin(w), v / w * (1.0 - math.cos(w)), w, v, 0.0]
     return float(np.max(np.abs(x[:5, 0] - expected)))
 
@@ -146,37 +106,29 @@ def test_circle_matches_the_analytic_arc_to_second_order() -> None:
 def test_gauss_markov_states_decay_with_exp_minus_dt_over_tau() -> None:
     """Biases decay by exp(-dt/tau); their noise keeps the stationary variance."""
     layout = StateLayout(gps_bias=True, heading_bias=True)
-    model = process_model(layout)
+    step = MotionStep(process_model(layout))
     x = np.zeros((layout.n, 1))
     x[m.WHEEL_SCALE, 0] = 1.0
     x[7:, 0] = [1.0, -2.0, 0.1]
-    out = m.motion_model(x, np.zeros(3), 6.0, model)
+    out, _, q = step(x, np.zeros(3), NO_INPUT_NOISE, 6.0)
     np.testing.assert_allclose(
         out[7:, 0], [math.exp(-0.1), -2 * math.exp(-0.1), 0.1 * math.exp(-0.2)]
     )
-    q = m.process_noise(x, np.zeros(3), np.zeros((3, 3)), 6.0, model)
     assert q[7, 7] == pytest.approx(4.0 * (1.0 - math.exp(-0.2)))
 
 
 def test_process_noise_is_symmetric_positive_semidefinite() -> None:
     """Q is symmetric and PSD, and splitting an IMU interval keeps the yaw variance."""
     layout = StateLayout(gps_bias=True, heading_bias=True)
-    model = process_model(layout)
+    step = MotionStep(process_model(layout))
     rng = np.random.default_rng(4)
     x, u = random_state(layout, rng), np.array([0.5, 1.0, 5.0])
     cov = np.diag([1e-4, 1e-3, 1e-3])
-    q = m.process_noise(x, u, cov, 0.01, model)
+    q = step(x, u, cov, 0.01)[2]
     np.testing.assert_allclose(q, q.T, atol=1e-18)
     assert np.min(np.linalg.eigvalsh(q)) > -1e-15
-    half = m.process_noise(x, u, cov, 0.005, model)
+    half = step(x, u, cov, 0.005)[2]
     assert 2 * half[m.YAW, m.YAW] == pytest.approx(q[m.YAW, m.YAW])
-
-
-def test_heading_residual_wraps_across_pi() -> None:
-    """Measured just past -pi, predicted just below +pi: the residual is small and positive."""
-    z, h = np.array([[-math.pi + 0.01]]), np.array([[math.pi - 0.02]])
-    np.testing.assert_allclose(heading_residual(z, h), [[0.03]], atol=1e-12)
-    np.testing.assert_allclose(heading_residual(h, z), [[-0.03]], atol=1e-12)
 
 
 def test_state_names_follow_the_layout() -> None:

@@ -9,8 +9,9 @@ docstrings); these tests hold it to the plain formulation it replaced:
 * the same messages in stamp order (nothing late) give exactly the same
   numbers, and so does asking for the estimate after every message (every
   deferred replay run at once);
-* :class:`~localization.ekf.model.MotionStep` is bit for bit ``motion_model``,
-  ``jacob_f`` and ``process_noise``; P stays symmetric and positive, yaw
+* :class:`~localization.ekf.model.MotionStep` (the compiled motion model) is
+  bit for bit the numpy reference's ``motion_model``, ``jacob_f`` and
+  ``process_noise`` (``ekf_reference``); P stays symmetric and positive, yaw
   wrapped, the arrays the history shares read-only, the cached estimate current.
 """
 
@@ -31,6 +32,7 @@ from conesim.localization.ekf.model import ProcessModel, StateLayout
 from conesim.sim.sensors import get_profile, override
 from conesim.sim.world import World, WorldConfig
 from conesim.tracks import load_track
+from tests.localization import ekf_reference as ref
 
 Tick = tuple[float, list[Message]]  # (world time after a physics step, messages delivered)
 
@@ -266,9 +268,9 @@ def test_motion_step_is_bit_for_bit_the_reference_model(
         cov = np.diag(rng.uniform(1e-7, 1e-2, 3))
         dt = (0.001, 0.01, 0.2, 0.0049)[k % 4]
         x1, f, q = step(x, u, cov, dt)
-        np.testing.assert_array_equal(x1, m.motion_model(x, u, dt, model))
-        np.testing.assert_array_equal(f, m.jacob_f(x, u, dt, model))
-        np.testing.assert_array_equal(q, m.process_noise(x, u, cov, dt, model))
+        np.testing.assert_array_equal(x1, ref.motion_model(x, u, dt, model))
+        np.testing.assert_array_equal(f, ref.jacob_f(x, u, dt, model))
+        np.testing.assert_array_equal(q, ref.process_noise(x, u, cov, dt, model))
 
 
 def test_wrap_yaw_is_wrap_angle_bit_for_bit() -> None:
