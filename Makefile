@@ -22,7 +22,7 @@ run: $(STAMP)
 
 # The whole test suite, then lint and type check.
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 	$(BIN)/python scripts/typecheck.py
@@ -34,8 +34,9 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(BIN)/python scripts/typecheck.py
 
+# Every benchmark script; their figures go to benchmarks/RESULTS.md.
 bench: $(STAMP)
-	for f in benchmarks/bench_*.py; do echo "== $$f"; $(BIN)/python $$f || exit 1; done
+	$(BIN)/python benchmarks/write_results.py
 
 # numba's cached kernels: a cached kernel is checked against its own file only,
 # so after editing a kernel that another file's kernels call
