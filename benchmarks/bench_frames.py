@@ -1,4 +1,4 @@
-"""Speed of the frame tree on seed 000's chain reference -> gps_antenna -> os_sensor.
+"""Speed of the frame tree on spec 000's chain reference -> gps_antenna -> os_sensor.
 
 Prints CPU microseconds per call (``time.process_time``, so other work on a
 shared machine does not count), the median over repeats of ``timeit`` runs, for:
@@ -25,7 +25,7 @@ import numpy as np
 from conesim.core.pose import Pose2D
 from conesim.localization.frames import LATEST, Buffer, TransformStamped
 
-RATE = 20.0  # dynamic link rate [Hz], as the seed's broadcaster
+RATE = 20.0  # dynamic link rate [Hz], as the ROS pipeline's broadcaster
 HISTORY = 10.0  # sim time already held when measuring [s]
 REPEATS = 7
 NUMBER = 20_000
@@ -39,7 +39,7 @@ def vehicle_transform(stamp: float) -> TransformStamped:
 
 
 def seed_buffer() -> Buffer:
-    """Seed 000's tree with HISTORY seconds of the dynamic link at RATE."""
+    """Spec 000's tree with HISTORY seconds of the dynamic link at RATE."""
     buffer = Buffer()
     for k in range(int(HISTORY * RATE) + 1):
         buffer.set_transform(vehicle_transform(k / RATE))

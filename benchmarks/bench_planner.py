@@ -12,7 +12,7 @@
 1b. The floor scipy sets: section 1's scenes again, with the planner's two
    scipy calls timed where they happen (``timing.timed_calls`` on
    ``planner.bridges.Delaunay`` and ``planner.spline.splprep``): qhull's
-   triangulation of every cone in view with its virtual partners (the seed's
+   triangulation of every cone in view with its virtual partners (the ROS pipeline's
    and the issue's "Delaunay on all of them") and the spline fit through the
    midpoints. Per size: the points triangulated, each call's mean time, the
    median per detection of the two together ("scipy") and of everything else
@@ -56,7 +56,7 @@ from timing import timed_calls
 
 FloatArray = NDArray[np.float64]
 VIEW = 30.0  # [m] cones ahead of the sensor in the latency scenes
-SENSOR_Z = -0.1  # [m] os_sensor below gps_antenna (seed)
+SENSOR_Z = -0.1  # [m] os_sensor below gps_antenna (spec 000)
 
 
 def frame_tree(pose: Pose2D, stamp: float = 1.0) -> Buffer:
@@ -135,7 +135,7 @@ def scipy_floor(repeats: int) -> None:
 
     The planner's two scipy calls (``Delaunay`` on every cone in view and its
     virtual partners; ``splprep`` through the midpoints), which the issue and
-    the seed name, are timed where the planner makes them, in runs of the
+    the ROS pipeline name, are timed where the planner makes them, in runs of the
     same scenes as section 1 with the timing wrappers added (the same data,
     the cache state of a planning step); "rest" is everything else per detection:
     the frame tree, the projection, the compiled steps, the messages.

@@ -59,7 +59,7 @@ class EnvConfig:
     Attributes:
         track: shipped track name or a track file.
         sensors: sensor profile (``ideal``, ``rtk``, ``consumer``, ``consumer_white``).
-        localization: ``fused`` (EKF), ``raw`` (seed) or ``truth``.
+        localization: ``fused`` (EKF), ``raw`` (the ROS pipeline's) or ``truth``.
         laps: laps to complete [-].
         control_rate: actions per simulated second [Hz].
         physics_rate: physics steps per second [Hz]; a multiple of control_rate.

@@ -36,7 +36,7 @@ from conesim.planner.autopilot import AutopilotStep, default_config
 
 
 class AutopilotExpert:
-    """Drive a ``ConeTrackEnv`` with the seed's pipeline and pure pursuit.
+    """Drive a ``ConeTrackEnv`` with the ROS pipeline and pure pursuit.
 
     Call :meth:`reset` after every ``env.reset`` (the frame tree is new), then
     ``action = expert(info)`` after each step.

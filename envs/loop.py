@@ -223,7 +223,7 @@ class ClosedLoop:
     Args:
         track: the track.
         world: physics, sensors and vehicle settings.
-        localization: ``fused`` (EKF), ``raw`` (the seed's) or ``truth``.
+        localization: ``fused`` (EKF), ``raw`` (the ROS pipeline's) or ``truth``.
         control_rate: steps per simulated second [Hz]; ``world.physics_rate``
             is a whole multiple of it.
         rules: when an episode ends.

@@ -13,7 +13,7 @@ Vector mode (float32, shape ``(6 + 3 K,)``)::
   filter runs: ``truth`` is exact, ``raw`` states none; their upper bounds,
   1000 m and pi, while the filter has no estimate yet);
 * ``x_i, y_i`` [m]: the latest cone detection in ``os_sensor``, nearest first
-  (the seed's ``/sorted_cones_time``), ``m_i`` = 1 for a real entry and 0 for
+  (the ROS pipeline's ``/sorted_cones_time``), ``m_i`` = 1 for a real entry and 0 for
   padding (padded entries are zero).
 
 Dict mode adds the colours (one-hot over ``CONE_COLOURS``), the pose of

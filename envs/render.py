@@ -1,4 +1,4 @@
-"""Drawing the seed's RViz picture in 2D: the env's ``rgb_array`` and ``human`` modes.
+"""Drawing the ROS pipeline's RViz picture in 2D: the env's ``rgb_array`` and ``human`` modes.
 
 What is drawn (``Scene``): the cones by kind (where they are now: knocked
 cones move), the global path coloured by covariance status, the car's true
@@ -224,7 +224,7 @@ class Renderer:
         )  # fmt: skip
 
     def _speed_bars(self, ax: Axes, sc: Scene) -> None:
-        # Waypoint speed bars (the seed's /waypoint_speed_bars, seen from above):
+        # Waypoint speed bars (the ROS pipeline's /waypoint_speed_bars, seen from above):
         # a bar normal to the path whose length is the speed at 0.1 m per m/s.
         if len(sc.speeds) != len(sc.path):
             return

@@ -13,7 +13,7 @@ Choices where conesim's message is not a ROS one:
   velocity is (0, 0, yaw rate) with the yaw-rate variance at [2, 2], and the
   linear acceleration is the measured (x, y) specific force with
   z = +9.80665 m/s^2, what an accelerometer reads on level ground.
-* Heading: ``/global_yaw`` is the seed's ``std_msgs/Float32`` [rad] (no
+* Heading: ``/global_yaw`` is the ROS pipeline's ``std_msgs/Float32`` [rad] (no
   stamp, no variance). The same measurement, stamped at capture with its
   variance, is an orientation-only ``sensor_msgs/Imu`` in ``gps_antenna``
   (its yaw about z in the ENU ``reference``, variance at [2, 2], roll and
@@ -24,13 +24,13 @@ Choices where conesim's message is not a ROS one:
   frame: linear.x the speed [m/s], covariance[0] its variance; the other
   components are not measured (zero, variance ``UNMEASURED_VARIANCE``).
   robot_localization takes a twist this way.
-* Cone detections: the seed's custom ``ModifiedFloat32MultiArray``
+* Cone detections: the ROS pipeline's custom ``ModifiedFloat32MultiArray``
   (``CONE_ARRAY_DEFINITION``, registered as ``CONE_ARRAY_TYPE``): the
   header, a layout of two dimensions (``cones`` of size n, ``xyz`` of size
   3) and the cones as x, y, z float32 triples [m], nearest first. It has no
   colour field; the detector's colour labels are not recorded.
 * ``/final_waypoints`` and ``/waypoint_speed_bars`` are MarkerArrays as in
-  the seed, each holding one list marker (a SPHERE_LIST of the waypoints; a
+  the ROS pipeline, each holding one list marker (a SPHERE_LIST of the waypoints; a
   LINE_LIST of vertical bars, ``SPEED_BAR_SCALE`` metres per m/s) rather than
   one marker per waypoint: the same picture at a quarter of the writing
   cost (0.8 against 3.4 ms for both topics at 40 waypoints; rosbags builds
@@ -98,7 +98,7 @@ MarkerArray = ros.visualization_msgs__msg__MarkerArray
 MeshFile = ros.visualization_msgs__msg__MeshFile
 
 CONE_ARRAY_DEFINITION = """\
-# The seed's /sorted_cones_time: std_msgs/Float32MultiArray with a header.
+# The ROS pipeline's /sorted_cones_time: std_msgs/Float32MultiArray with a header.
 # data: the detected cones as x, y, z triples [m] in header.frame_id
 # (os_sensor), nearest first; layout.dim: [cones (size n, stride 3 n),
 # xyz (size 3, stride 3)]; header.stamp: the capture time.
@@ -119,7 +119,7 @@ SPEED_BAR = (0.1, 0.0, 0.0)
 BRIDGE_LINE = (0.05, 0.0, 0.0)
 PATH_LINE = (0.1, 0.0, 0.0)
 
-# RViz colours (r, g, b, a) of the seed's markers and the cone kinds.
+# RViz colours (r, g, b, a) of the ROS pipeline's markers and the cone kinds.
 BLUE = (0.0, 0.0, 1.0, 1.0)
 YELLOW = (1.0, 1.0, 0.0, 1.0)
 MAGENTA = (1.0, 0.0, 1.0, 1.0)
@@ -270,7 +270,7 @@ def local_xy(point: PointStamped) -> RosPointStamped:
 
 
 def global_yaw(heading: HeadingStamped) -> Float32:
-    """``/global_yaw``: the seed's bare heading [rad]."""
+    """``/global_yaw``: the ROS pipeline's bare heading [rad]."""
     return Float32(data=heading.yaw)
 
 
@@ -425,7 +425,7 @@ def midpoint_marker(midpoints: Midpoints) -> Marker:
 
 
 def global_path_marker(path: GlobalPath, frame_id: str) -> Marker:
-    """``/global_path_marker``: the seed's LINE_STRIP, red where cov > threshold, else
+    """``/global_path_marker``: the ROS pipeline's LINE_STRIP, red where cov > threshold, else
     green (a closed path ends at its first point), stamped 0."""
     xy, red = np.asarray(path.xy), path.high_covariance
     if path.closed:

@@ -1,6 +1,6 @@
 """Pictures of a track: cones by kind and the global path by covariance status.
 
-The seed's ``status_colored_path_publisher`` draws the global path in RViz as a
+The ROS pipeline's ``status_colored_path_publisher`` draws the global path in RViz as a
 line strip, red where a point's covariance exceeds the threshold and green
 otherwise; this is the same picture as a PNG, with the cones in their FS colours.
 """

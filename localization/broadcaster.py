@@ -1,6 +1,6 @@
-"""The seed's ``vehicle_tf_broadcaster``: the vehicle's frames into the frame tree.
+"""The ROS pipeline's ``vehicle_tf_broadcaster``: the vehicle's frames into the frame tree.
 
-Seed 000, "Vehicle Pose TF Broadcaster" and "Integrating GPS-IMU Fusion into
+Spec 000, "Vehicle Pose TF Broadcaster" and "Integrating GPS-IMU Fusion into
 the TF Chain". Whatever the pose source, the broadcaster publishes the same
 two links into a :class:`~localization.frames.Buffer`::
 
@@ -8,10 +8,10 @@ two links into a :class:`~localization.frames.Buffer`::
 
 Modes (:class:`LocalizationMode`):
 
-* ``raw``: the seed as written. ``on_local_xy`` caches the last ``/local_xy``
+* ``raw``: the ROS pipeline as written. ``on_local_xy`` caches the last ``/local_xy``
   (x, y, z) and ``on_global_yaw`` the last ``/global_yaw``; each broadcast sends
   translation (x, y, z) and the rotation ``setRPY(0, 0, yaw)``, i.e. the
-  quaternion (0, 0, sin(yaw/2), cos(yaw/2)). Unlike the seed, whose cached
+  quaternion (0, 0, sin(yaw/2), cos(yaw/2)). Unlike the ROS pipeline, whose cached
   values start at zero, nothing is sent until both have arrived (a car at the
   origin facing east is a wrong pose, not a default), and a non-finite value
   is dropped with a logged warning instead of being broadcast.
@@ -20,7 +20,7 @@ Modes (:class:`LocalizationMode`):
 * ``truth``: a pose the caller passes at each step (ground truth, for
   debugging and RL baselines; only ``sim``/``envs`` have it).
 
-The dynamic transform is stamped with the broadcast time (the seed stamps it
+The dynamic transform is stamped with the broadcast time (the ROS pipeline stamps it
 with ``now()``); :meth:`VehicleTfBroadcaster.step` is called at every loop
 tick and publishes at the first tick at or after each 1 / ``rate`` grid time.
 """
@@ -63,11 +63,11 @@ class BroadcasterConfig:
     """
 
     mode: LocalizationMode = LocalizationMode.FUSED
-    rate: float = 20.0  # [Hz] seed 000
+    rate: float = 20.0  # [Hz] spec 000
     reference_frame: str = FRAME_REFERENCE
     antenna_frame: str = FRAME_GPS_ANTENNA
     sensor_frame: str = FRAME_OS_SENSOR
-    sensor_offset: tuple[float, float, float] = (0.0, 0.0, -0.1)  # [m] seed 000
+    sensor_offset: tuple[float, float, float] = (0.0, 0.0, -0.1)  # [m] spec 000
     authority: str = "vehicle_tf_broadcaster"
 
     def __post_init__(self) -> None:
@@ -112,7 +112,7 @@ class VehicleTfBroadcaster:
         )
         buffer.set_transform_static(self.static_transform, cfg.authority)
 
-    # -- the seed's subscriptions (raw mode) -------------------------------------------------
+    # -- the ROS pipeline's subscriptions (raw mode) ----------------------------------------
 
     def on_local_xy(self, point: PointStamped) -> None:
         """Cache the last ``/local_xy`` position (x, y, z) [m] in ``reference``."""

@@ -1,6 +1,6 @@
-"""The seed's ``gps_to_local_cartesian`` node: a GPS fix -> ``/local_xy`` in ``reference``.
+"""The ROS pipeline's ``gps_to_local_cartesian`` node: a GPS fix -> ``/local_xy`` in ``reference``.
 
-Seed 000, "GPS to Local Cartesian Conversion": on each ``NavSatFix`` the node
+Spec 000, "GPS to Local Cartesian Conversion": on each ``NavSatFix`` the node
 computes the equirectangular projection about the reference origin
 (``localization.geodesy.gps_to_local_cartesian``, R = 6378137 m)::
 
@@ -8,13 +8,13 @@ computes the equirectangular projection about the reference origin
     y = (lat_r - ref_lat_r) * R_EARTH
 
 (the longitude difference taken the short way round across the antimeridian)
-and publishes a ``PointStamped`` with the fix's stamp and z = 0. The seed
+and publishes a ``PointStamped`` with the fix's stamp and z = 0. The ROS pipeline
 copies the whole header; here the stamp is kept and ``frame_id`` is set to
-``reference``, the frame the seed says the point is in ("we treat this (x, y)
+``reference``, the frame the ROS pipeline says the point is in ("we treat this (x, y)
 as coordinates in the reference frame"), so no consumer mistakes it for an
 antenna-frame point.
 
-The seed publishes whatever it gets. :class:`GpsToLocalCartesian` drops fixes
+The ROS pipeline publishes whatever it gets. :class:`GpsToLocalCartesian` drops fixes
 that carry no position (status NO_FIX, NaN or infinite latitude/longitude),
 counting and logging the reason, since a NaN ``/local_xy`` would poison every
 consumer downstream.
@@ -42,7 +42,7 @@ _log = logging.getLogger(__name__)
 def gps_to_local_cartesian(
     fix: NavSatFix, origin: ReferenceOrigin = DEFAULT_ORIGIN, frame_id: str = FRAME_REFERENCE
 ) -> PointStamped:
-    """Project one fix into ``reference``: the seed's ``/local_xy``.
+    """Project one fix into ``reference``: the ROS pipeline's ``/local_xy``.
 
     Args:
         fix: the GPS fix (latitude, longitude [deg]); its status is not looked at.
@@ -73,7 +73,7 @@ class GpsToLocalCartesian:
     """The node: fixes in, ``/local_xy`` points out, unusable fixes counted.
 
     Args:
-        origin: the ``reference`` origin (the seed's launch parameters).
+        origin: the ``reference`` origin (the ROS pipeline's launch parameters).
         frame_id: frame of the output points.
 
     Attributes:

@@ -1,11 +1,11 @@
-"""The car's localization: measurements in, the frame tree out (seed 000).
+"""The car's localization: measurements in, the frame tree out (spec 000).
 
-One :class:`Localizer` per car wires the seed's localization nodes into one
+One :class:`Localizer` per car wires the ROS pipeline's localization nodes into one
 frame tree, in one of three modes (``LOCALIZATION_MODES``):
 
 - ``fused`` (default): every measurement goes into the fusion EKF
   (``localization.ekf``); the broadcaster publishes its estimate.
-- ``raw``: the seed as written: ``/ublox_gps_node/fix`` ->
+- ``raw``: the ROS pipeline as written: ``/ublox_gps_node/fix`` ->
   ``gps_to_local_cartesian`` -> ``/local_xy``, and ``/global_yaw``, cached
   by the broadcaster.
 - ``truth``: the broadcaster publishes the true pose the caller passes (a
@@ -96,7 +96,7 @@ class Localizer:
         return LocalizationStep(points, self.broadcaster.step(t, truth))
 
     def handle(self, messages: list[Message]) -> list[PointStamped]:
-        """Each message to the seed's nodes and the filter; the ``/local_xy`` points made."""
+        """Each message to the ROS pipeline's nodes and the filter; the ``/local_xy`` points."""
         points: list[PointStamped] = []
         broadcaster = self.broadcaster
         ekf = self.ekf

@@ -15,7 +15,7 @@ class LocalizationMode(StrEnum):
     FUSED = "fused"
     """The fusion EKF's estimate (default)."""
     RAW = "raw"
-    """The seed as written: the last ``/local_xy`` and ``/global_yaw``."""
+    """The ROS pipeline as written: the last ``/local_xy`` and ``/global_yaw``."""
     TRUTH = "truth"
     """The true pose (a baseline and a debugging aid)."""
 

@@ -2,7 +2,7 @@
 
 Each track is built from a parametric centreline, cones are placed along its
 edges as FS organisers do, and the result is written in our own format
-(``<name>.yaml``) with its global path (``<name>_path.csv``, the seed's
+(``<name>.yaml``) with its global path (``<name>_path.csv``, the ROS pipeline's
 ``lat,lon,cov`` CSV). Run from the repository root::
 
     python scripts/make_tracks.py [--out tracks/data] [--plot DIR]
@@ -26,7 +26,7 @@ braking zone to 175 m; skidpad: the FS circles).
 
 Global path covariance: RTK fixed (~2 cm sigma, 0.0004 m^2) with small
 variation, and an "RTK float under trees" stretch rising to ~0.02 m^2, above
-the seed's red threshold 0.0025 m^2.
+the ROS pipeline's red threshold 0.0025 m^2.
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ MIN_SPACING = 1.5  # [m] cone spacing in the tightest corners
 BIG_ORANGE_HALF_GAP = 0.3  # [m] big orange cones stand +-0.3 m from the line (fssim)
 START_BEHIND_LINE = 4.0  # [m] standing start behind the start/finish line
 RTK_FIXED_COV = 0.0004  # [m^2] 2 cm sigma
-RTK_FLOAT_COV = 0.02  # [m^2] ~14 cm sigma: the seed draws it red (> 0.0025 m^2)
+RTK_FLOAT_COV = 0.02  # [m^2] ~14 cm sigma: the ROS pipeline draws it red (> 0.0025 m^2)
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
-"""The global path: the seed's ``lat,lon,cov`` CSV, loaded into `reference`.
+"""The global path: the ROS pipeline's ``lat,lon,cov`` CSV, loaded into `reference`.
 
-The seed's ``status_colored_path_publisher`` reads one ``lat,lon,cov`` per line,
+The ROS pipeline's ``status_colored_path_publisher`` reads one ``lat,lon,cov`` per line,
 projects each point with the same reference origin as ``gps_to_local_cartesian``
 and colours each point red where ``cov`` exceeds a threshold (0.0025 m^2, i.e. a
 5 cm standard deviation) and green otherwise. This module is that node's data
@@ -52,7 +52,7 @@ class GlobalPath:
         lon: (n,) longitude [deg].
         origin: the `reference` origin the points were projected with.
         closed: True when the last point joins back to the first (a loop).
-        cov_threshold: the seed's red/green threshold [m^2].
+        cov_threshold: the ROS pipeline's red/green threshold [m^2].
     """
 
     xy: FloatArray
@@ -93,12 +93,12 @@ class GlobalPath:
 
     @property
     def high_covariance(self) -> NDArray[np.bool_]:
-        """(n,) True where the seed draws the point red (cov > threshold)."""
+        """(n,) True where the ROS pipeline draws the point red (cov > threshold)."""
         return self.cov > self.cov_threshold
 
     @property
     def status(self) -> list[str]:
-        """(n,) the seed's colour per point: ``"red"`` or ``"green"``."""
+        """(n,) the ROS pipeline's colour per point: ``"red"`` or ``"green"``."""
         return ["red" if high else "green" for high in self.high_covariance]
 
     @property
@@ -124,7 +124,7 @@ def global_path_from_geodetic(
     origin: ReferenceOrigin = DEFAULT_ORIGIN,
     closed: bool | None = None,
 ) -> GlobalPath:
-    """Build a path from geodetic points, projected with the seed's formula.
+    """Build a path from geodetic points, projected with the ROS pipeline's formula.
 
     Args:
         lat: (n,) [deg].
@@ -157,7 +157,7 @@ def global_path_from_centreline(
     """Georeference a centreline in `reference` as a global path.
 
     For tracks that come without a global path: the points are mapped to
-    lat/lon with the exact inverse of the seed projection, so reading the
+    lat/lon with the exact inverse of the ROS pipeline's projection, so reading the
     written CSV back reproduces ``xy`` to ~1e-9 m.
 
     Args:
@@ -186,7 +186,7 @@ def read_global_path_csv(
     origin: ReferenceOrigin = DEFAULT_ORIGIN,
     closed: bool | None = None,
 ) -> GlobalPath:
-    """Read the seed's global path CSV: one ``lat,lon,cov`` per line.
+    """Read the ROS pipeline's global path CSV: one ``lat,lon,cov`` per line.
 
     A first line ``lat,lon,cov`` is accepted as a header; blank lines are skipped.
 
@@ -250,7 +250,7 @@ def _parse_row(
 
 
 def write_global_path_csv(path: str | os.PathLike[str], global_path: GlobalPath) -> None:
-    """Write ``global_path`` as the seed's CSV (no header), atomically.
+    """Write ``global_path`` as the ROS pipeline's CSV (no header), atomically.
 
     The file appears complete or not at all (temporary file + ``os.replace``).
     Latitude and longitude are written with 12 decimals (~1e-7 m).

@@ -37,7 +37,7 @@ class Track:
         start_pose: where the vehicle's reference point starts, in `reference`.
         layout: ``closed`` (a loop), ``open`` (acceleration) or ``skidpad``.
         source: the file the track was read from, if any.
-        global_path_file: the seed-format ``lat,lon,cov`` CSV that goes with
+        global_path_file: the ROS pipeline's ``lat,lon,cov`` CSV that goes with
             the track, if any.
         description: free text.
 

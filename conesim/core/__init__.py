@@ -1,9 +1,9 @@
 """The shared vocabulary at the bottom of conesim: what every package may import.
 
-- ``messages``: what travels between the car and its software (the seed's
+- ``messages``: what travels between the car and its software (the ROS pipeline's
   ROS messages, reduced to 2D), and the frame names.
 - ``pose``: ``Pose2D`` and ``wrap_angle``.
-- ``geodesy``: the reference origin and the seed's GPS-to-local projection.
+- ``geodesy``: the reference origin and the ROS pipeline's GPS-to-local projection.
 - ``compiled``: numba's ``njit`` with the on-disk cache the kernels share.
 
 These modules import nothing else of conesim, as every ROS node shares

@@ -2,8 +2,8 @@
 
 Two projections, both vectorised over numpy arrays:
 
-* The seed's equirectangular projection (``gps_to_local_cartesian``), exactly as
-  the seed's ``gps_to_local_cartesian_node`` computes it, with R = 6378137 m::
+* The ROS pipeline's equirectangular projection (``gps_to_local_cartesian``), exactly as
+  the ROS pipeline's ``gps_to_local_cartesian_node`` computes it, with R = 6378137 m::
 
       x = (lon_r - ref_lon_r) * cos(ref_lat_r) * R
       y = (lat_r - ref_lat_r) * R
@@ -11,15 +11,15 @@ Two projections, both vectorised over numpy arrays:
 
   and its exact algebraic inverse (``local_cartesian_to_gps``), which the
   simulator uses to generate fixes so that truth and estimate agree. One
-  departure from the seed: a longitude difference beyond +-180 deg (a track
+  departure from the ROS pipeline: a longitude difference beyond +-180 deg (a track
   across the antimeridian) is taken the short way round, and the inverse's
-  longitude is wrapped into [-180, 180] (the seed's formula put a fix 21 m
+  longitude is wrapped into [-180, 180] (the ROS pipeline's formula put a fix 21 m
   east of such an origin 38,000 km west); everywhere else the numbers are
-  the seed's bit for bit.
+  the ROS pipeline's bit for bit.
 
 * Exact WGS84 geodetic -> ECEF -> ENU (``geodetic_to_enu`` / ``enu_to_geodetic``),
   through pymap3d (a well-kept library; no reason to hand-write the ellipsoid
-  maths). Use it far from the origin: at latitude 37.5 deg the seed's sphere
+  maths). Use it far from the origin: at latitude 37.5 deg the ROS pipeline's sphere
   makes northing 0.300 % too large and easting 0.124 % too small (0.30 / 0.12 m
   at 100 m; REFERENCES.md, "Geodesy").
 
@@ -36,7 +36,7 @@ import numpy as np
 import pymap3d
 from numpy.typing import ArrayLike, NDArray
 
-R_EARTH = 6378137.0  # [m] the seed's R_EARTH (WGS84 equatorial radius)
+R_EARTH = 6378137.0  # [m] the ROS pipeline's R_EARTH (WGS84 equatorial radius)
 
 FloatArray = NDArray[np.float64]
 
@@ -66,8 +66,8 @@ class ReferenceOrigin:
     """The geodetic origin of the `reference` frame (ENU).
 
     Attributes:
-        lat_deg: latitude [deg], in [-90, 90] (the seed's launch default 37.540190).
-        lon_deg: longitude [deg], in [-180, 180] (the seed's default 127.076488).
+        lat_deg: latitude [deg], in [-90, 90] (the ROS pipeline's launch default 37.540190).
+        lon_deg: longitude [deg], in [-180, 180] (the ROS pipeline's default 127.076488).
         alt_m: ellipsoidal height [m]; only the exact WGS84 conversion uses it.
     """
 
@@ -92,7 +92,7 @@ DEFAULT_ORIGIN = ReferenceOrigin()
 def gps_to_local_cartesian(
     lat_deg: ArrayLike, lon_deg: ArrayLike, origin: ReferenceOrigin = DEFAULT_ORIGIN
 ) -> tuple[FloatArray, FloatArray]:
-    """The seed's projection: geodetic -> (x east, y north) in `reference`.
+    """The ROS pipeline's projection: geodetic -> (x east, y north) in `reference`.
 
     Args:
         lat_deg: latitude(s) [deg], any shape.
@@ -100,7 +100,7 @@ def gps_to_local_cartesian(
         origin: the `reference` origin.
 
     Returns:
-        (x, y) [m], arrays of the input shape. z is 0 by the seed's definition.
+        (x, y) [m], arrays of the input shape. z is 0 by the ROS pipeline's definition.
 
     Raises:
         GeodesyError: NaN/inf or out-of-range latitude or longitude.

@@ -1,6 +1,6 @@
 """Message types: what travels between the simulated car and its software.
 
-Each mirrors the ROS message the seed uses, reduced to what a 2D car needs, and
+Each mirrors the ROS message the ROS pipeline uses, reduced to what a 2D car needs, and
 carries a ``Header`` with the capture stamp (simulation time [s]) and frame.
 A dependency-free leaf module (numpy only): the simulator's sensor models build
 these messages and ``localization``/``planner`` consume them, as every ROS node
@@ -52,7 +52,7 @@ class NavSatStatus(IntEnum):
 
 @dataclass(frozen=True, slots=True)
 class NavSatFix:
-    """sensor_msgs/NavSatFix (the seed's ``/ublox_gps_node/fix``).
+    """sensor_msgs/NavSatFix (the ROS pipeline's ``/ublox_gps_node/fix``).
 
     Attributes:
         header: stamp and frame (``gps_antenna``).
@@ -80,7 +80,7 @@ class NavSatFix:
 
 @dataclass(frozen=True, slots=True)
 class PointStamped:
-    """geometry_msgs/PointStamped (the seed's ``/local_xy``) [m]."""
+    """geometry_msgs/PointStamped (the ROS pipeline's ``/local_xy``) [m]."""
 
     header: Header
     x: float
@@ -90,7 +90,7 @@ class PointStamped:
 
 @dataclass(frozen=True, slots=True)
 class HeadingStamped:
-    """The seed's ``/global_yaw`` (std_msgs/Float32 in radians), stamped.
+    """The ROS pipeline's ``/global_yaw`` (std_msgs/Float32 in radians), stamped.
 
     Attributes:
         header: stamp and frame (``reference``: yaw of ``gps_antenna`` in it).
@@ -135,7 +135,7 @@ class WheelSpeed:
 
 @dataclass(frozen=True, slots=True)
 class ConeDetections:
-    """The seed's ``/sorted_cones_time``: cones in ``os_sensor``, nearest first.
+    """The ROS pipeline's ``/sorted_cones_time``: cones in ``os_sensor``, nearest first.
 
     Attributes:
         header: capture stamp and frame (``os_sensor``).

@@ -1,6 +1,6 @@
 """GPS/IMU fusion: a filterpy EKF estimating the pose of ``gps_antenna`` in ``reference``.
 
-Seed 000, "Integrating GPS-IMU Fusion into the TF Chain": the filter's output
+Spec 000, "Integrating GPS-IMU Fusion into the TF Chain": the filter's output
 replaces the raw ``/local_xy`` + ``/global_yaw`` pose in the
 ``reference -> gps_antenna`` transform (``localization.broadcaster``).
 

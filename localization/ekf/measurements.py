@@ -193,7 +193,7 @@ def from_imu(msg: Imu, cfg: EkfConfig) -> Measurement:
 
 
 def from_fix(msg: NavSatFix, cfg: EkfConfig) -> Measurement:
-    """The antenna position in ``reference`` (the seed's ``/local_xy``), (2, 1) [m]."""
+    """The antenna position in ``reference`` (the ROS pipeline's ``/local_xy``), (2, 1) [m]."""
     stamp = msg.header.stamp
     _check_header(Sensor.GPS, stamp, msg.header.frame_id, cfg.antenna_frame)
     if msg.status == NavSatStatus.NO_FIX:

@@ -19,7 +19,7 @@ State: the pose of ``gps_antenna`` in ``reference``, plus what the sensors need
 ==  ============  =====================================================  ========
 
 Why this state. The state lives at the antenna because the antenna *is* the
-``gps_antenna`` frame the filter publishes (seed 000): GPS fixes observe it
+``gps_antenna`` frame the filter publishes (spec 000): GPS fixes observe it
 without a lever arm, the IMU sits there (its specific force is the antenna's,
 ``sim.world`` moves it to the lever arm), and the broadcaster needs no
 CG-to-antenna offset. The IMU is the *input* (a strapdown 2D INS), not a

@@ -1,6 +1,6 @@
 """The frame tree with tf2 semantics (ros2/geometry2), in Python.
 
-The vehicle's tree (seed 000, ``shared/ARCHITECTURE.md``)::
+The vehicle's tree (spec 000, ``shared/ARCHITECTURE.md``)::
 
     reference --(dynamic, 20 Hz)--> gps_antenna --(static: z = -0.1 m)--> os_sensor
 

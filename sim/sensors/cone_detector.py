@@ -1,4 +1,4 @@
-"""Cone detector: the seed's ``/sorted_cones_time``, cones in ``os_sensor``.
+"""Cone detector: the ROS pipeline's ``/sorted_cones_time``, cones in ``os_sensor``.
 
 A scan at capture time t, with the vehicle at the antenna pose (``os_sensor``
 has the same planar pose, 0.1 m lower):

@@ -8,7 +8,7 @@ Error model, per axis (east, north) in ``reference`` [m], at capture k::
 (a first-order Gauss-Markov bias, ``noise.GaussMarkov``, dt = time between
 captures), so the stationary per-axis std is sqrt(sigma_w^2 + sigma_b^2). The
 fix is ``local_cartesian_to_gps(x + e_x, y + e_y)``: the exact inverse of the
-seed's projection, so ``gps_to_local_cartesian`` of a noise-free fix returns
+reference pipeline's projection, so ``gps_to_local_cartesian`` of a noise-free fix returns
 the antenna position. Altitude is the origin's (a 2D simulator).
 
 The reported ``position_covariance`` is what a receiver states, not the truth:

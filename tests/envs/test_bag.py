@@ -116,7 +116,7 @@ def test_bag_directory_holds_metadata_and_one_mcap_file(recorded: Recorded) -> N
 
 
 def test_topics_and_types(recorded: Recorded) -> None:
-    """Every topic of the table, with the seed's names and standard types."""
+    """Every topic of the table, with the ROS pipeline's names and standard types."""
     assert recorded.types == {t.name: t.msgtype for t in TOPICS}
     assert recorded.types["/ublox_gps_node/fix"] == "sensor_msgs/msg/NavSatFix"
     assert recorded.types["/tf"] == "tf2_msgs/msg/TFMessage"
@@ -198,7 +198,7 @@ def test_timestamps_are_monotonic_per_topic(recorded: Recorded) -> None:
 
 
 def test_navsatfix_round_trips_to_the_frame_tree(recorded: Recorded) -> None:
-    """Each fix, projected with the seed's geodesy, is within 0.15 m (about 4 sigma of
+    """Each fix, projected with the ROS pipeline's geodesy, is within 0.15 m (about 4 sigma of
     rtk's 2.5 cm per axis plus the EKF's ~1 cm) of gps_antenna in the frame tree at
     the fix's stamp, and is the /local_xy point to 1e-9 m."""
     loop = recorded.loop

@@ -38,7 +38,7 @@ def test_autopilot_completes_laps_cleanly(track: str, seed: int) -> None:
 @pytest.mark.parametrize("seed", SEEDS)
 @pytest.mark.parametrize("track", shipped_tracks())
 def test_raw_localization_laps_at_the_cautious_limits(track: str, seed: int) -> None:
-    """The seed's raw broadcaster (last fix, last heading: a pose up to 150 ms
+    """The ROS pipeline's raw broadcaster (last fix, last heading: a pose up to 150 ms
     old) drives at ``AutopilotConfig.cautious()``: every lap clean. At the
     default limits the car left trackdrive and autocross with it."""
     result = run_scenario(track, laps=2, seed=seed, sensors="rtk", localization="raw")

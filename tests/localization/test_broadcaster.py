@@ -1,4 +1,4 @@
-"""The vehicle TF broadcaster: raw (the seed), fused (the EKF) and truth modes."""
+"""The vehicle TF broadcaster: raw (the ROS pipeline), fused (the EKF) and truth modes."""
 
 from __future__ import annotations
 

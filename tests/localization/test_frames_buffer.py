@@ -17,7 +17,7 @@ IDENTITY_MATRIX = np.eye(4)
 
 
 def seed_tree(stamp: float = 1.0) -> Buffer:
-    """Seed 000's tree: vehicle at (100, 50) with yaw 90 deg, os_sensor 0.1 m below."""
+    """Spec 000's tree: vehicle at (100, 50) with yaw 90 deg, os_sensor 0.1 m below."""
     buffer = Buffer()
     buffer.set_transform(
         TransformStamped.from_pose2d(
@@ -51,7 +51,7 @@ def random_tree(rng: np.random.Generator) -> tuple[Buffer, dict[str, np.ndarray]
 
 
 def test_seed_example_point_ahead_of_os_sensor() -> None:
-    """Seed 000: (1, 0, 0) in os_sensor is (100, 51, -0.1) in reference."""
+    """Spec 000: (1, 0, 0) in os_sensor is (100, 51, -0.1) in reference."""
     buffer = seed_tree()
     for time in (1.0, LATEST):
         out = buffer.transform_points("reference", "os_sensor", [[1.0, 0.0, 0.0]], time)

@@ -28,7 +28,7 @@ SQRT2 = math.sqrt(2.0)
 
 
 def driving_tree(poses: dict[float, Pose2D]) -> Buffer:
-    """Seed 000's tree with the antenna at ``poses`` (stamp -> pose), os_sensor 0.1 m below."""
+    """Spec 000's tree with the antenna at ``poses`` (stamp -> pose), os_sensor 0.1 m below."""
     buffer = Buffer()
     for stamp, pose in poses.items():
         buffer.set_transform(TransformStamped.from_pose2d("reference", "gps_antenna", stamp, pose))

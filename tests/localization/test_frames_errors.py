@@ -27,7 +27,7 @@ YAW_30 = (0.0, 0.0, math.sin(math.pi / 12), math.cos(math.pi / 12))
 
 
 def seed_tree() -> Buffer:
-    """Seed 000's tree with dynamic data at 1.0 s and 2.0 s."""
+    """Spec 000's tree with dynamic data at 1.0 s and 2.0 s."""
     buffer = Buffer()
     for stamp, x in [(1.0, 100.0), (2.0, 102.0)]:
         buffer.set_transform(

@@ -1,4 +1,4 @@
-"""Tests for localization.geodesy: the seed's projection, its inverse, WGS84 ENU."""
+"""Tests for localization.geodesy: the ROS pipeline's projection, its inverse, WGS84 ENU."""
 
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ from conesim.core.geodesy import (
 
 
 def seed_formula(lat: float, lon: float, ref_lat: float, ref_lon: float) -> tuple[float, float]:
-    """The seed's C++ lines, transcribed with math (not numpy)."""
+    """The ROS pipeline's C++ lines, transcribed with math (not numpy)."""
     lat_r, lon_r = math.radians(lat), math.radians(lon)
     ref_lat_r, ref_lon_r = math.radians(ref_lat), math.radians(ref_lon)
     x = (lon_r - ref_lon_r) * math.cos(ref_lat_r) * 6378137.0
@@ -39,7 +39,7 @@ def test_default_origin_is_the_seeds_launch_default() -> None:
 
 
 def test_projection_matches_seed_formula_to_1e9_m() -> None:
-    """Vectorised projection equals the seed's scalar formula to 1e-9 m."""
+    """Vectorised projection equals the ROS pipeline's scalar formula to 1e-9 m."""
     rng = np.random.default_rng(0)
     lat = DEFAULT_ORIGIN.lat_deg + rng.uniform(-0.01, 0.01, 200)
     lon = DEFAULT_ORIGIN.lon_deg + rng.uniform(-0.01, 0.01, 200)

@@ -1,4 +1,4 @@
-"""The seed's gps_to_local_cartesian node: NavSatFix -> /local_xy in reference."""
+"""The ROS pipeline's gps_to_local_cartesian node: NavSatFix -> /local_xy in reference."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from conesim.core.messages import (
 )
 from conesim.localization.gps_to_local import GpsToLocalCartesian, gps_to_local_cartesian
 
-R_EARTH = 6378137.0  # [m] the seed's constant
+R_EARTH = 6378137.0  # [m] the ROS pipeline's constant
 
 
 def fix(
@@ -28,7 +28,7 @@ def fix(
 
 
 def seed_formula(lat: float, lon: float, origin: ReferenceOrigin) -> tuple[float, float]:
-    """The seed's C++ lines, transcribed."""
+    """The ROS pipeline's C++ lines, transcribed."""
     lat_r, lon_r = math.radians(lat), math.radians(lon)
     ref_lat_r, ref_lon_r = math.radians(origin.lat_deg), math.radians(origin.lon_deg)
     x = (lon_r - ref_lon_r) * math.cos(ref_lat_r) * R_EARTH
@@ -40,7 +40,7 @@ def seed_formula(lat: float, lon: float, origin: ReferenceOrigin) -> tuple[float
     ("lat", "lon"), [(37.540190, 127.076488), (37.541, 127.0751), (37.5392, 127.0779)]
 )
 def test_matches_the_seed_formula(lat: float, lon: float) -> None:
-    """x, y equal the seed's projection to 1e-9 m; z = 0; stamp kept; frame reference."""
+    """x, y equal the ROS pipeline's projection to 1e-9 m; z = 0; stamp kept; frame reference."""
     point = gps_to_local_cartesian(fix(lat, lon))
     x, y = seed_formula(lat, lon, DEFAULT_ORIGIN)
     assert point.x == pytest.approx(x, abs=1e-9)

@@ -131,7 +131,7 @@ def test_multipath_switch_leaves_base_noise_unchanged() -> None:
 
 
 def test_default_origin_used() -> None:
-    """Without an origin the receiver uses the seed's 37.540190, 127.076488."""
+    """Without an origin the receiver uses the ROS pipeline's 37.540190, 127.076488."""
     fix = GpsReceiver(get_profile("ideal").gps, 0).capture(TruthSample(0.0, Pose2D(0, 0, 0)))
     assert fix is not None
     assert_allclose(

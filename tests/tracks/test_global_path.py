@@ -1,4 +1,4 @@
-"""Tests for localization.global_path: the seed's lat,lon,cov CSV."""
+"""Tests for localization.global_path: the ROS pipeline's lat,lon,cov CSV."""
 
 from __future__ import annotations
 
@@ -45,7 +45,7 @@ def test_csv_round_trip_reproduces_points(tmp_path: Path) -> None:
 
 
 def test_status_is_red_above_seed_threshold(tmp_path: Path) -> None:
-    """cov > 0.0025 m^2 is red, otherwise green (the seed's rule)."""
+    """cov > 0.0025 m^2 is red, otherwise green (the ROS pipeline's rule)."""
     lat, lon = local_cartesian_to_gps(np.array([0.0, 10.0, 20.0]), np.zeros(3))
     rows = [
         f"{lat[0]},{lon[0]},0.0025",
