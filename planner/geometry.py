@@ -46,7 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from conesim.planner import fused, kernels
+from conesim.planner import kernel_chains, kernels
 from conesim.tracks.global_path import GlobalPath
 
 FloatArray = NDArray[np.float64]
@@ -184,7 +184,7 @@ class PathProjector:
         """
         p = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
         # One compiled call: the origin, the window and the search.
-        seg, foot, station, offset, tangent, distance = fused.project_around(
+        seg, foot, station, offset, tangent, distance = kernel_chains.project_around(
             p,
             self._table,
             self._blocks,

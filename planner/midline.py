@@ -31,13 +31,13 @@ only examines the path segments that straddle a boundary edge's line, and
 the speed profile), with the numbers of the numpy code they replaced
 (``tests/planner/kernels/``). Step 3's triangulation is scipy's.
 ``reference_path_planning`` runs the compiled steps between two scipy calls
-in one call each (``planner.fused``: steps 2 and 3a in
+in one call each (``planner.kernel_chains``: steps 2 and 3a in
 ``cones_with_partners``, steps 3 and 4 after the triangulation in
 ``bridges_and_midpoints``, step 6's arc length and crossing test with step
-7's limits after the spline in ``fused.check_and_limit``), with each
+7's limits after the spline in ``kernel_chains.check_and_limit``), with each
 config's settings gathered once (``MidlineConfig.view_settings`` ...,
 ``SpeedProfileConfig.limit_settings``): the same numbers, without a call,
-a wrapper and a dataclass per step (``tests/planner/test_fused.py``).
+a wrapper and a dataclass per step (``tests/planner/test_kernel_chains.py``).
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ from numpy.typing import NDArray
 
 from conesim.core.messages import FRAME_OS_SENSOR, Header
 from conesim.localization.frames import LATEST, Buffer, TransformError
-from conesim.planner import fused, kernels
+from conesim.planner import kernel_chains, kernels
 from conesim.planner.bridges import (
     Bridges,
     ConeSet,
@@ -225,7 +225,7 @@ def boundary_cones(
 def cones_with_partners(
     cones: ConeSet, config: MidlineConfig
 ) -> tuple[ConeSet, TrackEstimate, int]:
-    """Steps 2 and 3a in one compiled call (``fused.plan_cones``).
+    """Steps 2 and 3a in one compiled call (``kernel_chains.plan_cones``).
 
     ``boundary_cones``, then ``virtual_partners`` joined after the kept
     cones: the same cones, estimate and count, without the pair table.
@@ -236,7 +236,7 @@ def cones_with_partners(
     """
     axis = cones.axis
     points, side, offset, station, tangent, virtual, width, centre, measured, dropped = (
-        fused.plan_cones(
+        kernel_chains.plan_cones(
             cones.points,
             cones.side,
             cones.offset,
@@ -259,7 +259,7 @@ def bridges_and_midpoints(
     track: TrackEstimate,
     sensor_station: float,
 ) -> tuple[Bridges, FloatArray, FloatArray, float]:
-    """Steps 3 and 4 after the triangulation, in one compiled call (``fused.plan_midpoints``).
+    """Steps 3 and 4 after the triangulation, one compiled call (``kernel_chains.plan_midpoints``).
 
     ``find_bridges`` on the triangulation's edges, ``ordered_midpoints``, and
     the boundary edges as segments.
@@ -277,7 +277,7 @@ def bridges_and_midpoints(
     """
     axis = cones.axis
     left, right, length, valid, used, mid, station, boundary, ordered, ordered_length = (
-        fused.plan_midpoints(
+        kernel_chains.plan_midpoints(
             simplices,
             cones.points,
             cones.side,
@@ -412,7 +412,7 @@ def reference_path_planning(
     path = np.ascontiguousarray(fit_path(midpoints, config, midpoints_length), dtype=float)
     # The arc length for the check and the speed profile, the crossing test
     # and the profile's limits: one compiled call.
-    s, crosses, limits = fused.check_and_limit(
+    s, crosses, limits = kernel_chains.check_and_limit(
         path, boundary, speeds is None, (speed_config or _DEFAULT_SPEED).limit_settings
     )
     reason = check_path(path, len(midpoints), boundary, config, float(s[-1]), crosses=crosses)

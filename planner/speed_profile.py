@@ -274,7 +274,7 @@ def profile_speeds(
     The jerk limit's cube root (``numpy.cbrt``) and the passes
     (``kernels.profile_passes``, which changes ``v`` in place); the rest of
     ``speed_profile``, for a caller that had the limits computed in a
-    compiled call of its own (``fused.check_and_limit``).
+    compiled call of its own (``kernel_chains.check_and_limit``).
     """
     c = config or _DEFAULT_CONFIG
     arc, kappa, v, ratio = limits

@@ -3,7 +3,7 @@
 Private to ``planner.kernels``: each helper is compiled once here and called
 from the kernels of several modules. numba's cache checks a cached kernel
 against its own source file only, so the callers' cached machine code keeps
-the old helper after an edit here: run ``make clean-cache`` (``planner.fused``,
+the old helper after an edit here: run ``make clean-cache`` (``planner.kernel_chains``,
 which chains the step kernels from another file, is in the same position).
 """
 

@@ -1,4 +1,4 @@
-"""Scenes and numpy references shared by the kernels' tests (and ``test_fused``).
+"""Scenes and numpy references shared by the kernels' tests (and ``test_kernel_chains``).
 
 Random cones on a wobbly track (``random_cones``), a wobbly loop's projector
 (``loop_projector``), and the numpy formulations of the pair table and the

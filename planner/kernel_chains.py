@@ -45,7 +45,7 @@ def _probe() -> None:
     """Nothing: what ``cached_njit`` asks numba to cache, from this file's directory."""
 
 
-_compiled = cached_njit(_probe, "conesim.planner.fused")
+_compiled = cached_njit(_probe, "conesim.planner.kernel_chains")
 
 
 @_compiled

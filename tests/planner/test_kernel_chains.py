@@ -1,4 +1,4 @@
-"""The fused stages (``planner.fused``) give what the steps give one by one, bit for bit."""
+"""The kernel chains (``planner.kernel_chains``) give what the steps give one by one, exactly."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_array_equal
 
-from conesim.planner import MidlineConfig, SpeedProfileConfig, fused, kernels
+from conesim.planner import MidlineConfig, SpeedProfileConfig, kernel_chains, kernels
 from conesim.planner.bridges import (
     ConeSet,
     boundary_edges,
@@ -51,7 +51,7 @@ def test_partner_points_are_the_numpy_shift() -> None:
 
 
 @pytest.mark.parametrize("closed", [True, False])
-def test_fused_stages_are_the_steps(closed: bool) -> None:
+def test_chains_are_the_steps(closed: bool) -> None:
     """``cones_with_partners`` and ``bridges_and_midpoints`` against the steps composed."""
     rng = np.random.default_rng(41)
     for trial in range(150):
@@ -81,7 +81,7 @@ def test_fused_stages_are_the_steps(closed: bool) -> None:
 
 
 def test_no_cones_in_view() -> None:
-    """The fused stage on an empty view: no cones, nominal track, no bridges."""
+    """The chains on an empty view: no cones, nominal track, no bridges."""
     cones = random_cones(np.random.default_rng(42), 0, closed=False)
     got, track, dropped = cones_with_partners(cones, MidlineConfig())
     assert (len(got), track.measured, dropped) == (0, False, 0)
@@ -91,7 +91,7 @@ def test_no_cones_in_view() -> None:
 
 @pytest.mark.parametrize("profile", [True, False])
 def test_check_and_limit_is_the_steps(profile: bool) -> None:
-    """``fused.check_and_limit`` and ``profile_speeds``: the arc length, the crossing
+    """``kernel_chains.check_and_limit`` and ``profile_speeds``: the arc length, the crossing
     test and ``speed_profile``'s speeds, for paths that cross the boundary and not."""
     rng = np.random.default_rng(43)
     configs = [
@@ -104,7 +104,9 @@ def test_check_and_limit_is_the_steps(profile: bool) -> None:
         path = np.cumsum(rng.normal(0.5, 0.2, (n, 2)), axis=0)
         boundary = rng.uniform(-5.0, 30.0, (int(rng.integers(0, 8)), 2, 2))
         config = configs[trial % len(configs)]
-        s, crosses, limits = fused.check_and_limit(path, boundary, profile, config.limit_settings)
+        s, crosses, limits = kernel_chains.check_and_limit(
+            path, boundary, profile, config.limit_settings
+        )
         assert_array_equal(s, arc_length(path))
         assert crosses == kernels.crosses_boundary(path, boundary)
         if profile:
