@@ -234,14 +234,7 @@ def estimate_track(pairs: PairTable, config: MidlineConfig) -> TrackEstimate:
     ``kernels.estimate_track``.
     """
     width, centre, measured = kernels.estimate_track(
-        pairs.dist,
-        pairs.same_stretch,
-        pairs.span,
-        pairs.middle,
-        config.min_track_width,
-        config.max_track_width,
-        config.max_bridge_length,
-        config.min_width_samples,
+        pairs.dist, pairs.same_stretch, pairs.span, pairs.middle, config.view_settings
     )
     return track_estimate(width, centre, measured, config)
 
@@ -294,10 +287,9 @@ def virtual_partners(
         pairs.right,
         pairs.same_stretch,
         pairs.dist,
-        config.partner_radius,
         track.centre,
         track.width,
-        config.partner_offset_tolerance,
+        config.partner_settings,
     )
     if len(need) == 0:
         return _no_cones(cones.axis)
@@ -377,11 +369,9 @@ def find_bridges(
         cones.virtual,
         cones.axis.length,
         cones.axis.closed,
-        *config.bridge_settings,
         check_width,
         track.width if track is not None else 0.0,
-        config.width_tolerance,
-        config.bridge_selection == "shortest",
+        config.bridge_settings,
     )
     return Bridges(left, right, length, valid, used, midpoints, station)
 
@@ -395,7 +385,6 @@ def boundary_edges(cones: ConeSet, edges: IntArray, config: MidlineConfig) -> In
         cones.station,
         cones.axis.length,
         cones.axis.closed,
-        config.min_track_width,
-        config.max_station_gap,
+        config.bridge_settings,
     )
     return edges.take(rows, axis=0)

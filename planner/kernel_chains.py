@@ -60,8 +60,8 @@ def plan_cones(points, side, offset, station, tangent, length, closed, view, par
         tangent: (n, 2) the global path's direction at each.
         length: the station axis' length [m].
         closed: whether stations wrap.
-        view: ``kernels.boundary_cones``' settings (``MidlineConfig.view_settings``).
-        partners: nominal width, partner radius and offset tolerance [m]
+        view: step 2's ``settings.ViewSettings`` (``MidlineConfig.view_settings``).
+        partners: step 3a's ``settings.PartnerSettings``
             (``MidlineConfig.partner_settings``).
 
     Returns:
@@ -71,11 +71,10 @@ def plan_cones(points, side, offset, station, tangent, length, closed, view, par
         were dropped (n - k).
     """
     keep, left, right, dist, same, _, _, width, centre, measured = kernels.boundary_cones(
-        points, side, offset, station, length, closed, *view
+        points, side, offset, station, length, closed, view
     )
-    nominal_width, partner_radius, partner_tolerance = partners
     if not measured:  # bridges.track_estimate
-        width = nominal_width
+        width = partners.nominal_track_width
         centre = 0.0
     k = len(keep)
     real_side = side[keep]
@@ -83,16 +82,7 @@ def plan_cones(points, side, offset, station, tangent, length, closed, view, par
     real_points = points[keep]
     real_tangent = tangent[keep]
     need = kernels.partners_needed(
-        real_side,
-        real_offset,
-        left,
-        right,
-        same,
-        dist,
-        partner_radius,
-        centre,
-        width,
-        partner_tolerance,
+        real_side, real_offset, left, right, same, dist, centre, width, partners
     )
     v = len(need)
     p_points, p_side, p_offset = kernels.partner_points(
@@ -138,7 +128,7 @@ def plan_cones(points, side, offset, station, tangent, length, closed, view, par
 @_compiled
 def plan_midpoints(  # noqa: PLR0917
     simplices, points, side, offset, station, virtual, length, closed,
-    checks, check_width, width, width_tolerance, shortest, sensor_station, ordering,
+    check_width, width, sensor_station, checks, ordering,
 ):  # fmt: skip
     """Steps 3 and 4 after the triangulation: bridges, boundary segments, ordered midpoints.
 
@@ -151,15 +141,13 @@ def plan_midpoints(  # noqa: PLR0917
         virtual: (n,) True for a virtual partner.
         length: the station axis' length [m].
         closed: whether stations wrap.
-        checks: min and max span, max length, max station gap [m]
-            (``MidlineConfig.bridge_settings``; the boundary edges use the
-            first and the last too).
         check_width: whether the span is checked against ``width``.
         width: the measured width [m].
-        width_tolerance: how far a span may be from it [m].
-        shortest: keep only the shortest valid bridge of each cone.
         sensor_station: the sensor's station [m].
-        ordering: ``kernels.ordered_midpoints``' settings
+        checks: step 3's ``settings.BridgeSettings``
+            (``MidlineConfig.bridge_settings``; the boundary edges use its
+            minimum span and station gap).
+        ordering: step 4's ``settings.OrderingSettings``
             (``MidlineConfig.ordering_settings``).
 
     Returns:
@@ -169,19 +157,16 @@ def plan_midpoints(  # noqa: PLR0917
     """
     edges = kernels.delaunay_edges(simplices, len(points))
     left, right, size, valid, used, mid, mid_station = kernels.find_bridges(
-        edges, points, side, offset, station, virtual, length, closed,
-        *checks, check_width, width, width_tolerance, shortest,
-    )  # fmt: skip
-    min_width = checks[0]
-    max_gap = checks[3]
-    rows = kernels.boundary_edges(edges, side, offset, station, length, closed, min_width, max_gap)
+        edges, points, side, offset, station, virtual, length, closed, check_width, width, checks
+    )
+    rows = kernels.boundary_edges(edges, side, offset, station, length, closed, checks)
     boundary = np.empty((len(rows), 2, 2))
     for q in range(len(rows)):
         for end in range(2):
             boundary[q, end, 0] = points[edges[rows[q], end], 0]
             boundary[q, end, 1] = points[edges[rows[q], end], 1]
     ordered = kernels.ordered_midpoints(
-        used, mid, mid_station, sensor_station, length, closed, *ordering
+        used, mid, mid_station, sensor_station, length, closed, ordering
     )
     path_length = kernels.arc_length(ordered)[-1]
     return left, right, size, valid, used, mid, mid_station, boundary, ordered, path_length
@@ -248,7 +233,7 @@ def check_and_limit(path, boundary, profile, limits):
         path: (p, 2) the fitted path [m], C-contiguous.
         boundary: (e, 2, 2) the boundary segments it may not cross [m].
         profile: whether to compute the speed profile's limits.
-        limits: ``kernels.profile_limits``' settings
+        limits: step 7's ``settings.LimitSettings``
             (``SpeedProfileConfig.limit_settings``).
 
     Returns:
@@ -260,5 +245,5 @@ def check_and_limit(path, boundary, profile, limits):
     s = kernels.arc_length(path)
     crosses = kernels.crosses_boundary(path, boundary)
     if profile and len(path) > 0:
-        return s, crosses, kernels.profile_limits(path, s, True, *limits)
+        return s, crosses, kernels.profile_limits(path, s, True, limits)
     return s, crosses, (s, s, s, s)

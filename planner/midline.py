@@ -181,14 +181,7 @@ def cones_to_sensor(
 
 def in_view(cones: ConeSet, config: MidlineConfig) -> NDArray[np.bool_]:
     """Step 2a: (n,) mask of the cones in range and at a boundary's distance from the path."""
-    keep: NDArray[np.bool_] = kernels.in_view(
-        cones.points,
-        cones.offset,
-        config.min_x,
-        config.max_range,
-        config.min_boundary_offset,
-        config.max_boundary_offset,
-    )
+    keep: NDArray[np.bool_] = kernels.in_view(cones.points, cones.offset, config.view_settings)
     return keep
 
 
@@ -214,7 +207,7 @@ def boundary_cones(
         cones.station,
         axis.length,
         axis.closed,
-        *config.view_settings,
+        config.view_settings,
     )
     real = cones if len(keep) == len(cones) else cones.select(keep)
     pairs = PairTable(left, right, dist, same, span, middle)
@@ -286,12 +279,10 @@ def bridges_and_midpoints(
             cones.virtual,
             axis.length,
             axis.closed,
-            config.bridge_settings,
             track.measured,
             track.width,
-            config.width_tolerance,
-            config.bridge_selection == "shortest",
             sensor_station,
+            config.bridge_settings,
             config.ordering_settings,
         )
     )

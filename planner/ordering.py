@@ -50,9 +50,7 @@ def start_index(
         sensor_station,
         axis.length,
         axis.closed,
-        config.start_min_x,
-        config.start_station_back,
-        config.start_station_ahead,
+        config.ordering_settings,
     )
     return None if first < 0 else int(first)
 
@@ -71,11 +69,7 @@ def chain_nearest(
         first,
         axis.length,
         axis.closed,
-        config.max_step,
-        config.max_station_step,
-        config.station_back_tolerance,
-        config.min_step_advance,
-        config.min_midpoint_spacing,
+        config.ordering_settings,
     )
     return order
 
@@ -119,6 +113,6 @@ def ordered_midpoints(
         sensor_station,
         axis.length,
         axis.closed,
-        *config.ordering_settings,
+        config.ordering_settings,
     )
     return ordered

@@ -242,7 +242,7 @@ def speed_profile(
     arc = _NO_ARC if s is None else np.ascontiguousarray(s, dtype=float)
     if check:
         _check_profile_inputs(pts, arc if s is not None else None, v_start, v_end)
-    limits = kernels.profile_limits(pts, arc, s is not None, *c.limit_settings)
+    limits = kernels.profile_limits(pts, arc, s is not None, c.limit_settings)
     return profile_speeds(limits, c, v_start, v_end)
 
 
@@ -285,8 +285,8 @@ def profile_speeds(
         np.cbrt(ratio) if len(ratio) else ratio,  # jerk_limit's cube root, numpy's
         v_start is not None,
         0.0 if v_start is None else float(v_start),
-        *c.pass_settings,
         v_end is not None,
         0.0 if v_end is None else float(v_end),
+        c.pass_settings,
     )
     return speeds

@@ -24,10 +24,11 @@ _compiled = cached_njit(_probe, "conesim.planner.kernels.ordering")
 
 
 @_compiled
-def start_index(  # noqa: PLR0917
-    midpoints, station, sensor_station, length, closed, start_min_x, start_back, start_ahead
-):
+def start_index(midpoints, station, sensor_station, length, closed, ordering):  # noqa: PLR0917
     """``ordering.start_index``: the nearest midpoint in front (first of equals), or -1."""
+    start_min_x = ordering.start_min_x
+    start_back = ordering.start_station_back
+    start_ahead = ordering.start_station_ahead
     first = -1
     best = math.inf
     for i in range(len(station)):
@@ -42,18 +43,7 @@ def start_index(  # noqa: PLR0917
 
 
 @_compiled
-def chain_nearest(  # noqa: PLR0917
-    midpoints,
-    station,
-    first,
-    length,
-    closed,
-    max_step,
-    max_station_step,
-    back_tolerance,
-    min_advance,
-    min_spacing,
-):
+def chain_nearest(midpoints, station, first, length, closed, ordering):  # noqa: PLR0917
     """``ordering.chain_nearest``: the nearest-neighbour chain from ``first``.
 
     Each step goes to the nearest unvisited allowed midpoint, the first index
@@ -61,6 +51,11 @@ def chain_nearest(  # noqa: PLR0917
     The station advance is tested first: a midpoint it rules out needs no
     distance (the same choice, fewer ``np.hypot``).
     """
+    max_step = ordering.max_step
+    max_station_step = ordering.max_station_step
+    back_tolerance = ordering.station_back_tolerance
+    min_advance = ordering.min_step_advance
+    min_spacing = ordering.min_midpoint_spacing
     m = len(station)
     visited = np.zeros(m, np.bool_)
     visited[first] = True
@@ -100,33 +95,13 @@ def chain_nearest(  # noqa: PLR0917
 
 
 @_compiled
-def ordered_midpoints(  # noqa: PLR0917
-    used,
-    midpoints,
-    station,
-    sensor_station,
-    length,
-    closed,
-    start_min_x,
-    start_back,
-    start_ahead,
-    max_step,
-    max_station_step,
-    back_tolerance,
-    min_advance,
-    min_spacing,
-):
+def ordered_midpoints(used, midpoints, station, sensor_station, length, closed, ordering):  # noqa: PLR0917
     """``ordering.ordered_midpoints``: the used bridges' midpoints in driving order."""
     rows = true_rows(used)
     mid = midpoints[rows]
     st = station[rows]
-    first = start_index(
-        mid, st, sensor_station, length, closed, start_min_x, start_back, start_ahead
-    )
+    first = start_index(mid, st, sensor_station, length, closed, ordering)
     if first < 0:
         return np.zeros((0, 2))
-    order = chain_nearest(
-        mid, st, first, length, closed, max_step, max_station_step, back_tolerance, min_advance,
-        min_spacing,
-    )  # fmt: skip
+    order = chain_nearest(mid, st, first, length, closed, ordering)
     return mid[order]

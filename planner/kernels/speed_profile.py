@@ -43,18 +43,7 @@ def _half_window(window, spacing, n, rounded):
 
 
 @_compiled
-def profile_limits(  # noqa: PLR0917
-    points,
-    s,
-    has_s,
-    window,
-    a_lat,
-    a_lat_aero,
-    floor,
-    v_max,
-    jerk_max,
-    jerk_window,
-):
+def profile_limits(points, s, has_s, limits):
     """``speed_profile`` up to the jerk limit's cube root, for n >= 1 points.
 
     The arc length (unless ``has_s``; ``numpy.cumsum`` of the ``np.hypot``
@@ -70,6 +59,13 @@ def profile_limits(  # noqa: PLR0917
         ``numpy.cbrt``: on CPUs with AVX-512 numpy takes it from SVML, whose
         last bit differs from libm's (and numba's) in about half the cases.
     """
+    window = limits.curvature_window
+    a_lat = limits.a_lat_max
+    a_lat_aero = limits.a_lat_aero
+    floor = limits.curvature_floor
+    v_max = limits.v_max
+    jerk_max = limits.lateral_jerk_max
+    jerk_window = limits.jerk_window
     n = len(points)
     step_length = np.empty(max(n - 1, 0))
     for i in range(n - 1):
@@ -143,22 +139,7 @@ def _ellipse_scale(v, kappa, a_lat_max, a_lat_aero):
 
 
 @_compiled
-def profile_passes(  # noqa: PLR0917
-    s,
-    kappa,
-    v,
-    jerk,
-    has_start,
-    v_start,
-    ellipse,
-    a_drive,
-    a_brake,
-    a_lat,
-    a_lat_aero,
-    horizon_stop,
-    has_end,
-    v_end,
-):
+def profile_passes(s, kappa, v, jerk, has_start, v_start, has_end, v_end, passes):  # noqa: PLR0917
     """The rest of ``speed_profile``: speeds (n,) [m/s] for n >= 1 waypoints.
 
     ``numpy.minimum`` of the curvature limit ``v`` (changed in place) and
@@ -168,7 +149,14 @@ def profile_passes(  # noqa: PLR0917
     closed-form passes' running minima in the same direction; Python's
     ``min`` and ``max`` (the first argument unless the second is strictly
     less or greater) for the start and end speeds and in the ellipse passes.
+    ``passes`` is a ``settings.PassSettings``.
     """
+    ellipse = passes.friction_ellipse
+    a_drive = passes.a_drive
+    a_brake = passes.a_brake
+    a_lat = passes.a_lat_max
+    a_lat_aero = passes.a_lat_aero
+    horizon_stop = passes.horizon_stop
     n = len(v)
     if len(jerk):
         for i in range(n):

@@ -27,10 +27,15 @@ _compiled = cached_njit(_probe, "conesim.planner.kernels.track")
 
 
 @_compiled
-def in_view(  # noqa: PLR0917
-    points, offset, min_x, max_range, min_offset, max_offset
-):
-    """``midline.in_view``: (n,) mask of cones in range and at a boundary's offset."""
+def in_view(points, offset, view):
+    """``midline.in_view``: (n,) mask of cones in range and at a boundary's offset.
+
+    ``view`` is a ``settings.ViewSettings``.
+    """
+    min_x = view.min_x
+    max_range = view.max_range
+    min_offset = view.min_boundary_offset
+    max_offset = view.max_boundary_offset
     n = len(offset)
     keep = np.empty(n, np.bool_)
     for i in range(n):
@@ -156,10 +161,15 @@ def median(values):
 
 
 @_compiled
-def estimate_track(  # noqa: PLR0917
-    dist, same, span, middle, min_width, max_width, max_length, min_samples
-):
-    """``bridges.estimate_track``: (width, centre, measured); measured False gives (0, 0)."""
+def estimate_track(dist, same, span, middle, view):
+    """``bridges.estimate_track``: (width, centre, measured); measured False gives (0, 0).
+
+    ``view`` is a ``settings.ViewSettings`` (its span, length and sample count).
+    """
+    min_width = view.min_track_width
+    max_width = view.max_track_width
+    max_length = view.max_bridge_length
+    min_samples = view.min_width_samples
     a, b = dist.shape
     # One pass: each row's nearest valid partner and each column's (first of
     # equals: rows and columns are visited in increasing order).
@@ -213,43 +223,27 @@ def boundary_offset(side, offset, centre, width):
 
 
 @_compiled
-def boundary_cones(  # noqa: PLR0917
-    points,
-    side,
-    offset,
-    station,
-    length,
-    closed,
-    min_x,
-    max_range,
-    min_offset,
-    max_offset,
-    max_gap,
-    min_width,
-    max_width,
-    max_bridge,
-    min_samples,
-    tolerance,
-):
+def boundary_cones(points, side, offset, station, length, closed, view):  # noqa: PLR0917
     """``midline.boundary_cones``: kept rows, the pair table, (width, centre, measured).
 
     The cones in view; their pair table and the track estimate; when
-    measured, the cones more than ``tolerance`` inside their boundary line
-    dropped and the pair table rebuilt. The width and centre are 0 when not
-    measured (the caller puts in the nominal track).
+    measured, the cones more than ``view.boundary_tolerance`` inside their
+    boundary line dropped and the pair table rebuilt. The width and centre
+    are 0 when not measured (the caller puts in the nominal track). ``view``
+    is a ``settings.ViewSettings``.
     """
-    keep = true_rows(in_view(points, offset, min_x, max_range, min_offset, max_offset))
+    keep = true_rows(in_view(points, offset, view))
     pts = points[keep]
     sd = side[keep]
     off = offset[keep]
     st = station[keep]
-    left, right, dist, same, span, middle = pair_table(pts, sd, off, st, length, closed, max_gap)
-    width, centre, measured = estimate_track(
-        dist, same, span, middle, min_width, max_width, max_bridge, min_samples
+    left, right, dist, same, span, middle = pair_table(
+        pts, sd, off, st, length, closed, view.max_station_gap
     )
+    width, centre, measured = estimate_track(dist, same, span, middle, view)
     if measured:
         outside = boundary_offset(sd, off, centre, width)
-        on = outside >= -tolerance
+        on = outside >= -view.boundary_tolerance
         if not on.all():
             inner = true_rows(on)
             keep = keep[inner]
