@@ -32,7 +32,7 @@ Their one exception to "same operations": the jerk limit's cube root is left
 to ``numpy.cbrt`` between them, as numpy's SIMD (SVML) cube root is not libm's.
 
 The kernels are called through typed Python wrappers in ``geometry``,
-``bridges``, ``ordering``, ``midline`` and ``speed_profile``; they take plain
+``bridges``, ``midline`` and ``speed_profile``; they take plain
 arrays and scalars (no dataclasses) and are untyped for mypy (``numba`` has no
 stubs). Integer index arrays are ``intp``, sides ``int8``, flags ``bool``, all
 C-contiguous, so each kernel compiles to one specialisation.

@@ -1,7 +1,26 @@
-"""Step 4: the bridges' midpoints in driving order (``ordering``).
+"""Step 4: the bridges' midpoints in driving order, from the nearest one in front.
 
-The first midpoint (the nearest in front of the sensor), the
-nearest-neighbour chain from it, and both for the used bridges in one call.
+The seed sorts the midpoints "starting from the nearest in front of the
+vehicle, chaining through nearest neighbours". Two guards keep the chain on
+one stretch of track, using each midpoint's station along the global path
+(the mean of its cones' stations; ``settings.OrderingSettings`` names the
+limits):
+
+- the start (``start_index``) is the nearest midpoint with x >
+  ``start_min_x`` whose station is within [-start_station_back,
+  +start_station_ahead] of the sensor's; a hairpin's far side, in front of
+  the car but a stretch later, is not a start;
+- each step (``chain_nearest``) goes to the nearest unvisited midpoint within
+  ``max_step`` whose station advances by at most ``max_station_step``,
+  regresses by at most ``station_back_tolerance``, and advances by at least
+  ``min_step_advance`` times the step's length: the chain never jumps across
+  an infield (a large station jump), sideways to a stray midpoint, nor turns
+  back. A midpoint closer than ``min_midpoint_spacing`` to the chain's last
+  one is merged into it (skipped).
+
+The chain stops when no midpoint qualifies. ``ordered_midpoints`` runs both
+on the used bridges. Of equally near midpoints the lowest index wins, the one
+a stable ``argsort`` of the step lengths ranks first.
 """
 
 from __future__ import annotations
@@ -25,7 +44,16 @@ _compiled = cached_njit(_probe, "conesim.planner.kernels.ordering")
 
 @_compiled
 def start_index(midpoints, station, sensor_station, length, closed, ordering):  # noqa: PLR0917
-    """``ordering.start_index``: the nearest midpoint in front (first of equals), or -1."""
+    """The index of the nearest midpoint in front of the sensor (first of equals), or -1.
+
+    Args:
+        midpoints: (k, 2) midpoints in ``os_sensor`` [m].
+        station: (k,) their stations [m].
+        sensor_station: the sensor's station [m].
+        length: the station axis' length [m].
+        closed: whether stations wrap.
+        ordering: a ``settings.OrderingSettings`` (the start's fields).
+    """
     start_min_x = ordering.start_min_x
     start_back = ordering.start_station_back
     start_ahead = ordering.start_station_ahead
@@ -44,7 +72,7 @@ def start_index(midpoints, station, sensor_station, length, closed, ordering):  
 
 @_compiled
 def chain_nearest(midpoints, station, first, length, closed, ordering):  # noqa: PLR0917
-    """``ordering.chain_nearest``: the nearest-neighbour chain from ``first``.
+    """(m,) indices of the nearest-neighbour chain from index ``first``, m >= 1.
 
     Each step goes to the nearest unvisited allowed midpoint, the first index
     of equals: the first unvisited one in a stable ``argsort`` of the row.
@@ -96,7 +124,11 @@ def chain_nearest(midpoints, station, first, length, closed, ordering):  # noqa:
 
 @_compiled
 def ordered_midpoints(used, midpoints, station, sensor_station, length, closed, ordering):  # noqa: PLR0917
-    """``ordering.ordered_midpoints``: the used bridges' midpoints in driving order."""
+    """The used bridges' midpoints (m, 2) [m] in driving order; (0, 2) with none in front.
+
+    ``used`` (k,) selects among ``midpoints`` (k, 2) and ``station`` (k,);
+    then ``start_index`` and ``chain_nearest``.
+    """
     rows = true_rows(used)
     mid = midpoints[rows]
     st = station[rows]

@@ -21,7 +21,6 @@ from conesim.planner.bridges import (
 )
 from conesim.planner.geometry import arc_length
 from conesim.planner.midline import boundary_cones, bridges_and_midpoints, cones_with_partners
-from conesim.planner.ordering import ordered_midpoints
 from conesim.planner.speed_profile import profile_speeds, speed_profile
 from tests.planner.kernels.helpers import random_cones, ref_track
 
@@ -75,7 +74,10 @@ def test_chains_are_the_steps(closed: bool) -> None:
             name = field.name
             assert_array_equal(getattr(bridges, name), getattr(want_bridges, name), err_msg=name)
         assert_array_equal(boundary, want.points[boundary_edges(want, edges, config)])
-        want_mid = ordered_midpoints(bridges, sensor_station, want.axis, config)
+        want_mid = kernels.ordered_midpoints(
+            bridges.used, bridges.midpoints, bridges.station, sensor_station,
+            want.axis.length, want.axis.closed, config.ordering_settings,
+        )  # fmt: skip
         assert_array_equal(midpoints, want_mid)
         assert length == float(arc_length(want_mid)[-1])
 

@@ -29,7 +29,6 @@ from conesim.planner.geometry import (
     segments_cross,
 )
 from conesim.planner.midline import check_path, cones_to_sensor
-from conesim.planner.ordering import chain_nearest
 from conesim.planner.speed_profile import menger_curvature, speed_profile
 from conesim.tracks.global_path import global_path_from_centreline
 
@@ -241,7 +240,9 @@ def test_chain_nearest_is_the_reference_walk() -> None:
         axis = StationAxis(60.0, closed=trial % 2 == 0)
         station = mid[:, 0] + rng.normal(0.0, 0.3, m)
         first = int(rng.integers(0, m))
-        got = chain_nearest(mid, station, first, axis, config).tolist()
+        got = kernels.chain_nearest(
+            mid, station, first, axis.length, axis.closed, config.ordering_settings
+        ).tolist()
         assert got == reference_chain(mid, station, first, axis, config)
 
 
