@@ -372,6 +372,7 @@ class SpeedProfileConfig(Settings):
             a_lat_max=float(self.a_lat_max),
             a_lat_aero=float(self.a_lat_aero),
             horizon_stop=bool(self.horizon_stop),
+            brake=True,
         )
 
 

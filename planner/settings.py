@@ -142,6 +142,8 @@ class PassSettings(NamedTuple):
         a_lat_max: lateral acceleration limit at rest [m/s^2] (the ellipse's).
         a_lat_aero: its growth with speed squared [1/m].
         horizon_stop: the last waypoint's speed is 0 (or the given end speed).
+        brake: the brake pass runs (False: the drive pass alone, for
+            ``speed_profile.forward_pass``).
     """
 
     friction_ellipse: bool
@@ -150,3 +152,4 @@ class PassSettings(NamedTuple):
     a_lat_max: float
     a_lat_aero: float
     horizon_stop: bool
+    brake: bool

@@ -140,16 +140,21 @@ def _ellipse_scale(v, kappa, a_lat_max, a_lat_aero):
 
 @_compiled
 def profile_passes(s, kappa, v, jerk, has_start, v_start, has_end, v_end, passes):  # noqa: PLR0917
-    """The rest of ``speed_profile``: speeds (n,) [m/s] for n >= 1 waypoints.
+    """The rest of ``speed_profile``: speeds (n,) [m/s] at n waypoints.
 
-    ``numpy.minimum`` of the curvature limit ``v`` (changed in place) and
-    ``jerk`` (skipped when empty), the start speed, the forward pass
-    (``ellipse_forward_pass`` or ``forward_pass``), the horizon stop and the
-    backward pass, each with the numpy or Python version's operations: the
-    closed-form passes' running minima in the same direction; Python's
-    ``min`` and ``max`` (the first argument unless the second is strictly
-    less or greater) for the start and end speeds and in the ellipse passes.
-    ``passes`` is a ``settings.PassSettings``.
+    The minimum of the curvature limit ``v`` (n,) [m/s] (changed in place)
+    and the jerk limit ``jerk`` (n,) [m/s] (skipped when empty), the start
+    speed, the drive pass (with the friction ellipse, reading ``kappa`` (n,)
+    [1/m], or in closed form), the horizon stop and the brake pass, along
+    arc lengths ``s`` (n,) [m]. ``passes`` is a ``settings.PassSettings``;
+    with ``passes.brake`` False the speeds after the horizon stop are
+    returned (``v`` itself). n >= 1 with the horizon stop.
+
+    Each with the reference's operations in its order: the closed-form
+    passes' running minima in the same direction (``numpy.minimum.accumulate``,
+    NaN kept); Python's ``min`` and ``max`` (the first argument unless the
+    second is strictly less or greater) for the start and end speeds and in
+    the ellipse passes.
     """
     ellipse = passes.friction_ellipse
     a_drive = passes.a_drive
@@ -191,6 +196,8 @@ def profile_passes(s, kappa, v, jerk, has_start, v_start, has_end, v_end, passes
                 v[n - 1] = end
         else:
             v[n - 1] = 0.0
+    if not passes.brake:
+        return v
     out = np.empty(n)
     if ellipse:
         out[n - 1] = v[n - 1]

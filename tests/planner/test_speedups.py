@@ -18,7 +18,7 @@ from scipy.spatial import Delaunay
 from conesim.core.messages import Header
 from conesim.core.pose import Pose2D
 from conesim.localization.frames import Buffer, TransformStamped
-from conesim.planner import MidlineConfig, kernels
+from conesim.planner import MidlineConfig, SpeedProfileConfig, kernels
 from conesim.planner.bridges import ConeSet, delaunay_edges, median
 from conesim.planner.classify import LEFT, RIGHT, ClassifiedCones, side_of_path
 from conesim.planner.geometry import (
@@ -29,7 +29,7 @@ from conesim.planner.geometry import (
     segments_cross,
 )
 from conesim.planner.midline import check_path, cones_to_sensor
-from conesim.planner.speed_profile import menger_curvature, speed_profile
+from conesim.planner.speed_profile import profile_curvature, speed_profile
 from conesim.tracks.global_path import global_path_from_centreline
 
 
@@ -266,7 +266,8 @@ def test_menger_curvature_and_known_arc_length() -> None:
         points = np.cumsum(rng.normal(0.0, 0.5, (n, 2)), axis=0)
         if n > 4:
             points[3] = points[2]  # a zero step: no curvature there
-        assert_array_equal(menger_curvature(points), reference_menger(points))
+        pointwise = SpeedProfileConfig(curvature_window=0.0)
+        assert_array_equal(profile_curvature(points, pointwise), reference_menger(points))
         assert_array_equal(speed_profile(points, s=arc_length(points)), speed_profile(points))
 
 
