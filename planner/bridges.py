@@ -54,7 +54,6 @@ virtual partner skips building and joining them.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -100,10 +99,6 @@ class ConeSet:
     def __len__(self) -> int:
         return len(self.points)
 
-    def station_gap(self, i: IntArray, j: IntArray) -> FloatArray:
-        """|station[j] - station[i]|, wrapped on a closed path [m]."""
-        return np.abs(self.axis.difference(self.station[j], self.station[i]))
-
     def select(self, keep: BoolArray | IntArray) -> ConeSet:
         """The cones where ``keep`` (mask or indices)."""
         if keep.dtype == np.bool_:  # compress and take: faster than [] on (n, 2)
@@ -123,20 +118,6 @@ class ConeSet:
             station=self.station.take(keep),
             tangent=self.tangent.take(keep, axis=0),
             virtual=self.virtual.take(keep),
-            axis=self.axis,
-        )
-
-    def join(self, other: ConeSet) -> ConeSet:
-        """This set followed by ``other`` (this set itself when ``other`` is empty)."""
-        if len(other) == 0:
-            return self
-        return ConeSet(
-            points=np.concatenate([self.points, other.points]),
-            side=np.concatenate([self.side, other.side]),
-            offset=np.concatenate([self.offset, other.offset]),
-            station=np.concatenate([self.station, other.station]),
-            tangent=np.concatenate([self.tangent, other.tangent]),
-            virtual=np.concatenate([self.virtual, other.virtual]),
             axis=self.axis,
         )
 
@@ -215,14 +196,6 @@ class TrackEstimate:
     centre: float
     measured: bool
 
-    def boundary_offset(self, cones: ConeSet) -> FloatArray:
-        """(n,) how far each cone lies outside its boundary line, as seen from its side [m].
-
-        ``side * (offset - centre) - width / 2``: 0 on the boundary, < 0 inside
-        the track, > 0 outside; a cone labelled against its position is far inside.
-        """
-        return cones.side * (cones.offset - self.centre) - 0.5 * self.width
-
 
 def estimate_track(pairs: PairTable, config: MidlineConfig) -> TrackEstimate:
     """Median width and centre offset of the track in view.
@@ -246,22 +219,6 @@ def track_estimate(
     if not measured:
         return TrackEstimate(config.nominal_track_width, 0.0, measured=False)
     return TrackEstimate(float(width), float(centre), measured=True)
-
-
-def median(values: FloatArray) -> float:
-    """``float(numpy.median(values))`` of a non-empty 1-D array, with one sort.
-
-    The middle value, or the mean of the two middle values as ``(a + b) / 2``
-    (what ``numpy.median`` computes); NaN if any value is NaN.
-    """
-    ordered = np.sort(values)  # NaNs last
-    n = len(ordered)
-    half = n // 2
-    if math.isnan(ordered[-1]):
-        return math.nan
-    if n % 2:
-        return float(ordered[half])
-    return float((ordered[half - 1] + ordered[half]) / 2.0)
 
 
 def virtual_partners(

@@ -135,12 +135,6 @@ class PathProjector:
         self.path = path
         self._axis = StationAxis(self.length, self.closed)
 
-    def window_mask(self, lo: float, hi: float) -> NDArray[np.bool_]:
-        """(k,) True for the segments overlapping stations [lo, hi] [m] (wrapped if closed)."""
-        centre = 0.5 * (lo + hi)
-        reach = 0.5 * (hi - lo) + self._half_length
-        return np.abs(self._axis.difference(self._mid_station, centre)) <= reach
-
     def project(
         self,
         points: FloatArray,
@@ -269,67 +263,20 @@ class StationAxis:
     length: float
     closed: bool
 
-    def difference(self, s_to: FloatArray | float, s_from: FloatArray | float) -> FloatArray:
-        """``s_to - s_from`` [m], wrapped into [-length/2, length/2) on a closed path."""
-        return station_difference(s_to, s_from, self.length, self.closed)
 
-
-def station_difference(
-    s_to: FloatArray | float, s_from: FloatArray | float, length: float, closed: bool
-) -> FloatArray:
-    """Station difference ``s_to - s_from`` [m], wrapped on a closed path of ``length``.
-
-    >>> float(station_difference(1.0, 99.0, 100.0, True))
-    2.0
-    >>> float(station_difference(1.0, 99.0, 100.0, False))
-    -98.0
-    """
-    diff = np.subtract(s_to, s_from, dtype=float)
-    if closed and length > 0.0:
-        diff = (diff + 0.5 * length) % length - 0.5 * length
-    return diff
-
-
-def _orientation(d: FloatArray, c: FloatArray, r: FloatArray) -> FloatArray:
-    """(m, k) cross(d_i, r_j - p_i) = cross(d_i, r_j) - c_i, given c_i = cross(d_i, p_i)."""
-    return np.multiply.outer(d[:, 0], r[:, 1]) - np.multiply.outer(d[:, 1], r[:, 0]) - c[:, None]
-
-
-def segments_cross(
-    a0: FloatArray, a1: FloatArray, b0: FloatArray, b1: FloatArray
-) -> NDArray[np.bool_]:
-    """Whether segments ``a0 a1`` (m, 2) properly cross segments ``b0 b1`` (k, 2).
+def crosses_boundary(points: FloatArray, boundary: FloatArray) -> bool:
+    """Whether the polyline (p, 2) [m] properly crosses any of the (e, 2, 2) segments [m].
 
     Proper crossing: each segment's end points lie strictly on opposite sides
-    of the other's line (touching and collinear overlap do not count).
-
-    Returns:
-        (m, k) boolean matrix.
-    """
-    da, db = a1 - a0, b1 - b0
-    ca = da[:, 0] * a0[:, 1] - da[:, 1] * a0[:, 0]
-    cb = db[:, 0] * b0[:, 1] - db[:, 1] * b0[:, 0]
-    b_straddles = _orientation(da, ca, b0) * _orientation(da, ca, b1) < 0.0
-    a_straddles = _orientation(db, cb, a0) * _orientation(db, cb, a1) < 0.0
-    return b_straddles & a_straddles.T
-
-
-def polyline_crosses(points: FloatArray, b0: FloatArray, b1: FloatArray) -> bool:
-    """Whether the polyline (p, 2) properly crosses any segment ``b0 b1`` (k, 2).
-
-    ``np.any(segments_cross(points[:-1], points[1:], b0, b1))``, compiled
-    (``kernels.polyline_crosses``): for each segment's line, the side of each
+    of the other's line (touching and collinear overlap do not count). Compiled
+    (``kernels.crosses_boundary``): for each segment's line, the side of each
     polyline point; only a polyline step that straddles the line is tested
-    against the line through the other segment, and the first crossing ends
-    the search.
+    against the line through the segment, and the first crossing ends the search.
     """
-    if len(points) < 2 or len(b0) == 0:
-        return False
     return bool(
-        kernels.polyline_crosses(
-            np.ascontiguousarray(points, dtype=float),
-            np.ascontiguousarray(b0, dtype=float),
-            np.ascontiguousarray(b1, dtype=float),
+        kernels.crosses_boundary(
+            np.ascontiguousarray(points, dtype=float).reshape(-1, 2),
+            np.ascontiguousarray(boundary, dtype=float).reshape(-1, 2, 2),
         )
     )
 

@@ -62,7 +62,7 @@ from conesim.planner.bridges import (
 )
 from conesim.planner.classify import LEFT, RIGHT, ClassifiedCones
 from conesim.planner.config import MidlineConfig, SpeedProfileConfig
-from conesim.planner.geometry import FloatArray, arc_length
+from conesim.planner.geometry import FloatArray, arc_length, crosses_boundary
 from conesim.planner.messages import BridgeLines, LocalPath, Midpoints, Waypoints
 from conesim.planner.speed_profile import profile_speeds, speed_profile
 from conesim.planner.spline import fit_path
@@ -308,7 +308,7 @@ def check_path(
         config: the thresholds.
         length: the path's length [m] if known (``arc_length(path)[-1]``).
         crosses: whether it crosses a boundary edge, if known
-            (``kernels.crosses_boundary(path, boundary)``).
+            (``crosses_boundary(path, boundary)``).
     """
     if n_midpoints < 2:
         return f"{n_midpoints} ordered midpoints (need 2)"
@@ -320,7 +320,7 @@ def check_path(
     if start > config.max_start_distance:
         return f"path starts {start:.2f} m away (max {config.max_start_distance} m)"
     if crosses is None:
-        crosses = bool(kernels.crosses_boundary(path, boundary))  # polyline_crosses, compiled
+        crosses = crosses_boundary(path, boundary)
     if crosses:
         return "path crosses a track boundary"
     return ""

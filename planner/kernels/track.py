@@ -213,7 +213,12 @@ def estimate_track(dist, same, span, middle, view):
 
 @_compiled
 def boundary_offset(side, offset, centre, width):
-    """``TrackEstimate.boundary_offset``: ``side * (offset - centre) - width / 2``."""
+    """(n,) how far each cone lies outside its boundary line, as seen from its side [m].
+
+    ``side * (offset - centre) - width / 2`` for the track's centre offset and
+    width [m]: 0 on the boundary, < 0 inside the track, > 0 outside; a cone
+    labelled against its position is far inside.
+    """
     n = len(side)
     out = np.empty(n)
     half = 0.5 * width

@@ -22,7 +22,7 @@ from conesim.planner.bridges import (
 from conesim.planner.geometry import arc_length
 from conesim.planner.midline import boundary_cones, bridges_and_midpoints, cones_with_partners
 from conesim.planner.speed_profile import profile_speeds, speed_profile
-from tests.planner.kernels.helpers import random_cones, ref_track
+from tests.planner.kernels.helpers import joined, random_cones, ref_track
 
 
 def turned(rng: np.random.Generator, cones: ConeSet) -> ConeSet:
@@ -57,7 +57,7 @@ def test_chains_are_the_steps(closed: bool) -> None:
         cones = turned(rng, random_cones(rng, int(rng.integers(0, 70)), closed, trial % 3 == 0))
         config = MidlineConfig(bridge_selection="all" if trial % 5 == 0 else "shortest")
         real, pairs, track, dropped = boundary_cones(cones, config)
-        want = real.join(virtual_partners(real, pairs, config, track))
+        want = joined(real, virtual_partners(real, pairs, config, track))
         got, got_track, got_dropped = cones_with_partners(cones, config)
         assert (got_track, got_dropped) == (track, dropped)
         for field in ("points", "side", "offset", "station", "tangent", "virtual"):

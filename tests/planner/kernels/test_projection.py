@@ -10,6 +10,7 @@ import pytest
 from numpy.testing import assert_array_equal
 
 from conesim.planner.geometry import PathProjector
+from tests.planner.kernels.geometry_reference import axis_difference
 from tests.planner.kernels.helpers import loop_projector
 
 
@@ -29,7 +30,7 @@ def ref_projection(
     score = d2
     if prefer is not None:
         centre, half, penalty = prefer
-        away = np.abs(projector.axis.difference(table[:, 5], centre))
+        away = np.abs(axis_difference(projector.axis, table[:, 5], centre))
         score = np.sqrt(d2) + np.where(away <= half + table[:, 6], 0.0, penalty)
     mx = points[:, 0, None] - (table[:, 0] + 0.5 * dx)
     my = points[:, 1, None] - (table[:, 1] + 0.5 * dy)
