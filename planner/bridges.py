@@ -5,8 +5,8 @@ Steps of ``reference_path_planning`` that work on cones in ``os_sensor``:
 0. ``estimate_track``: the width and middle of the track in view, as the
    medians over each cone's nearest valid partner (the checks of step 3) of
    the offset difference and the mean offset. A cone more than
-   ``boundary_tolerance`` inside its boundary line (``TrackEstimate.
-   boundary_offset``) is then dropped: a false positive on the track, or a
+   ``boundary_tolerance`` inside its boundary line (``kernels.boundary_offset``)
+   is then dropped: a false positive on the track, or a
    cone labelled against its position (misclassified), would otherwise take
    the Delaunay edges of the real bridges around it.
 1. ``virtual_partners``: a cone with no cone of the other side within
@@ -43,13 +43,9 @@ Steps of ``reference_path_planning`` that work on cones in ``os_sensor``:
    below the minimum width, same stretch of track), which a sound path may not
    cross.
 
-Written for speed (it runs per detection on a few dozen cones, where numpy's
-per-call overhead dominates): the pair table, the track estimate, the
-partners' selection and positions, the edges from scipy's simplices, the bridge checks and
-the boundary edges are compiled loops (``planner.kernels``) with the numbers
-of the numpy code they replaced; medians are taken with one sort
-(``median``, the same number as ``numpy.median``), and a view with no
-virtual partner skips building and joining them.
+The functions here are the steps' typed entry points, one per kernel
+(``planner.kernels``: compiled, as they run per detection); the planning
+step runs them chained (``planner.kernel_chains``).
 """
 
 from __future__ import annotations

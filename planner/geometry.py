@@ -26,16 +26,9 @@ circles holding a window segment are searched first (nearest bound first),
 the others only when the best score reaches ``penalty``, which for a cone
 near the current stretch it does not.
 
-Written for speed (the planner runs this per detection, on a few dozen
-points, where numpy's per-call overhead of about a microsecond dominates):
-the search and the projection's numbers are compiled loops
-(``planner.kernels.nearest_segments``, ``project_rows``; they replaced a k-d
-tree over the midpoints plus numpy glue, twice the time), and so is
-``polyline_crosses``, which tests only the path segments that straddle a
-boundary edge's line and stops at the first crossing. The results are the
-numbers of the straightforward code (same operations per element;
-``tests/planner/kernels/test_projection.py`` keeps the k-d tree version as the
-reference).
+The search, the projection's numbers, the arc length and the crossing test
+(``crosses_boundary``) are compiled (``planner.kernels``): they run per
+detection.
 """
 
 from __future__ import annotations

@@ -1,18 +1,16 @@
 """The planning step's compiled stretches: consecutive step kernels chained in one call.
 
 ``reference_path_planning`` alternates compiled steps (``planner.kernels``)
-with scipy (``Delaunay``, ``splprep``), which stay Python calls. Between two
-scipy calls the steps used to be one compiled call each, through a typed
-wrapper that read its settings and built a dataclass: on a few dozen cones
-each such call cost as much as its loop (about 0.5 us to call, 0.1 us per
-argument, 1 us per array returned, plus the wrapper). Each function below
-runs one stretch of steps in one call; it calls the very step kernels the
-wrappers call (numba compiles the calls between jitted functions directly),
-so the numbers are theirs, bit for bit, and each step stays a named function
-that tests can call alone.
+with scipy (``Delaunay``, ``splprep``), which stay Python calls. Each
+function here runs the steps between two scipy calls in one compiled call,
+as a call into compiled code costs about as much as a step's loop on a few
+dozen cones. They call the very step kernels the steps' typed wrappers call
+(numba compiles calls between jitted functions directly), so the numbers
+are theirs, and each step stays a function that tests can call alone
+(``tests/planner/test_kernel_chains.py``).
 
 - ``plan_cones``: step 2 (``kernels.boundary_cones``), the nominal track when
-  the width is not measured (``bridges.track_estimate``), and step 3's virtual
+  the width is not measured (``bridges.track_estimate``), and step 3a's virtual
   partners (``kernels.partners_needed``, ``kernels.partner_points``), joined
   after the real cones.
 - ``project_around`` (classification): the window's origin, the window's
@@ -26,9 +24,10 @@ that tests can call alone.
   speed limits (``kernels.profile_limits``; the cube root and the passes
   follow in ``speed_profile.profile_speeds``).
 
-The arguments are plain arrays and scalars (``kernels``' conventions); the
-callers are in ``midline``. Compiled with numba's on-disk cache like
-``kernels`` (``localization.compiled.cached_njit``); numba checks each cached
+The arguments are arrays, scalars and the settings groups of
+``planner.settings`` (``kernels``' conventions); the callers are in
+``midline`` and ``geometry``. Compiled with numba's on-disk cache like
+``kernels`` (``conesim.core.compiled.cached_njit``); numba checks each cached
 function against its own file only, so after editing a step kernel that a
 function here calls, run ``make clean-cache``.
 """

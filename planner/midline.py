@@ -24,20 +24,15 @@ the current frame through the frame tree (old ``os_sensor`` at the old stamp
 plan reports ``PlanStatus.FALLBACK`` with the reason; with nothing to carry
 forward it is ``PlanStatus.FAILED`` with an empty path.
 
-Written for speed (per detection): the default settings are built once, and
-the steps' loops are compiled (``planner.kernels``: step 2 in one call, the
-bridges, the ordering, the spline's sampling, step 6's crossing test, which
-only examines the path segments that straddle a boundary edge's line, and
-the speed profile), with the numbers of the numpy code they replaced
-(``tests/planner/kernels/``). Step 3's triangulation is scipy's.
+It runs per detection, so the steps are compiled (``planner.kernels``;
+step 3's triangulation and step 5's fit are scipy's), and
 ``reference_path_planning`` runs the compiled steps between two scipy calls
-in one call each (``planner.kernel_chains``: steps 2 and 3a in
+in one call each (``planner.kernel_chains``): steps 2 and 3a in
 ``cones_with_partners``, steps 3 and 4 after the triangulation in
 ``bridges_and_midpoints``, step 6's arc length and crossing test with step
-7's limits after the spline in ``kernel_chains.check_and_limit``), with each
-config's settings gathered once (``MidlineConfig.view_settings`` ...,
-``SpeedProfileConfig.limit_settings``): the same numbers, without a call,
-a wrapper and a dataclass per step (``tests/planner/test_kernel_chains.py``).
+7's limits after the spline in ``kernel_chains.check_and_limit``, each
+given its settings groups (``MidlineConfig.view_settings`` ...,
+``SpeedProfileConfig.limit_settings``, built once per config).
 """
 
 from __future__ import annotations

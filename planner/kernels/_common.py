@@ -25,7 +25,10 @@ _compiled = cached_njit(_probe, "conesim.planner.kernels._common")
 
 @_compiled
 def wrapped_difference(diff, length, closed):
-    """``station_difference``'s wrap of one difference: ``(x % length) - length / 2``.
+    """A station difference ``diff`` [m] wrapped into [-length/2, length/2) when ``closed``.
+
+    ``(x % length) - length / 2``, numpy's formulation (the reference in
+    ``tests/planner/kernels/geometry_reference.py``), for one difference.
 
     With ``x = diff + length / 2``, Python's (and numpy's) float ``x % length``
     is ``fmod`` moved onto the divisor's sign; ``fmod`` is exact, and for x in

@@ -44,18 +44,20 @@ def _half_window(window, spacing, n, rounded):
 
 @_compiled
 def profile_limits(points, s, has_s, limits):
-    """``speed_profile`` up to the jerk limit's cube root, for n >= 1 points.
+    """``speed_profile`` up to the jerk limit's cube root, for (n, 2) points [m].
 
-    The arc length (unless ``has_s``; ``numpy.cumsum`` of the ``np.hypot``
-    steps), ``_menger``, ``window_mean`` when ``window > 0`` and n > 2,
-    ``curvature_limit`` (``floor = a_lat / v_max**2``) and ``jerk_limit``'s
-    ratio ``jerk_max / slope`` (inf where the slope is 0), each with the
-    numpy version's operations in its order.
+    The arc length (unless ``has_s``: then ``s`` (n,) [m]; ``numpy.cumsum``
+    of the ``np.hypot`` steps), the Menger curvature, its window mean when
+    ``limits.curvature_window > 0`` and n > 2, the curvature limit and the
+    jerk limit's ratio ``lateral_jerk_max / slope`` (inf where the slope is
+    0), each with the reference's operations in its order
+    (``tests/planner/kernels/speed_profile_reference.py``). ``limits`` is a
+    ``settings.LimitSettings``.
 
     Returns:
         s (n,) [m], the curvature kappa (n,) [1/m] the passes read, the
         curvature limit v (n,) [m/s], and the ratio (n,) [m^3/s^3] (empty
-        when ``jerk_limit`` gives None). Its cube root is left to
+        without a jerk limit). Its cube root is left to
         ``numpy.cbrt``: on CPUs with AVX-512 numpy takes it from SVML, whose
         last bit differs from libm's (and numba's) in about half the cases.
     """
@@ -132,7 +134,7 @@ def profile_limits(points, s, has_s, limits):
 
 @_compiled
 def _ellipse_scale(v, kappa, a_lat_max, a_lat_aero):
-    """``speed_profile._ellipse_scale``: sqrt(1 - (v^2 |kappa| / a_lat(v))^2), 0 beyond."""
+    """The friction ellipse's share left: sqrt(1 - (v^2 |kappa| / a_lat(v))^2), 0 beyond."""
     v2 = v * v
     lat = v2 * abs(kappa) / (a_lat_max + a_lat_aero * v2)
     return math.sqrt(1.0 - lat * lat) if lat < 1.0 else 0.0

@@ -3,7 +3,7 @@
 The cones in view (``midline.in_view``); the table of every left-right pair
 (``bridges.pair_table``) and its sub-table for a subset of the cones; the
 track's width and centre from each cone's nearest partner across
-(``bridges.estimate_track``, with its ``median``); each cone's offset from
+(``bridges.estimate_track``, with ``median``, ``numpy.median``'s number); each cone's offset from
 its boundary line; and all of step 2 in one call (``boundary_cones``).
 """
 
@@ -149,7 +149,7 @@ def sub_table(keep, n, left, right, dist, same, span, middle):  # noqa: PLR0917
 
 @_compiled
 def median(values):
-    """``bridges.median``: middle value or ``(a + b) / 2`` of the sorted values; NaN if any."""
+    """``numpy.median`` of (n,) values, n >= 1: the middle one or ``(a + b) / 2``; NaN if any."""
     ordered = np.sort(values)
     n = len(ordered)
     half = n // 2
