@@ -145,7 +145,22 @@ class PathProjector:
                 if no segment is in it), 0 ignores the window.
         """
         p = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
-        return self._project(p, self._preference(window, penalty))
+        lo, hi = (0.0, 0.0) if window is None else (float(window[0]), float(window[1]))
+        # One compiled call: the window's test and the search.
+        seg, foot, station, offset, tangent, distance = kernel_chains.project_window(
+            p,
+            self._table,
+            self._blocks,
+            _BLOCK,
+            window is not None,
+            lo,
+            hi,
+            float(penalty),
+            self.length,
+            self.closed,
+            self._half_max,
+        )
+        return Projection(foot, seg, station, offset, tangent, distance)
 
     def project_around(
         self,
@@ -191,45 +206,6 @@ class PathProjector:
     def axis(self) -> StationAxis:
         """The path's station axis."""
         return self._axis
-
-    def _preference(
-        self, window: tuple[float, float] | None, penalty: float
-    ) -> tuple[float, float, float] | None:
-        """The window as (centre, half width, penalty) [m], or None when it does not apply."""
-        if window is None or not penalty > 0.0:
-            return None
-        lo, hi = float(window[0]), float(window[1])
-        # The segments tile [0, length] (the whole ring when closed): a window
-        # reaching well into that range overlaps one of them, so the mask
-        # over every segment is only needed near or beyond the ends (compiled).
-        if not kernels.window_overlaps(
-            lo, hi, self._table, self.length, self.closed, self._half_max
-        ):
-            return None
-        return (0.5 * (lo + hi), 0.5 * (hi - lo), penalty)
-
-    def _project(self, p: FloatArray, prefer: tuple[float, float, float] | None) -> Projection:
-        """The projections of ``p`` (contiguous (n, 2)) with the window ``prefer``.
-
-        ``prefer`` is the window's (centre, half width, penalty) [m], None for
-        no window. Compiled: the search (``kernels.nearest_segments``) and the
-        projection's numbers (``kernels.project_rows``).
-        """
-        centre, half, penalty = (0.0, 0.0, 0.0) if prefer is None else prefer
-        seg, t, d2 = kernels.nearest_segments(
-            p,
-            self._table,
-            self._blocks,
-            _BLOCK,
-            prefer is not None,
-            centre,
-            half,
-            penalty,
-            self.length,
-            self.closed,
-        )
-        foot, station, offset, tangent, distance = kernels.project_rows(p, seg, t, d2, self._table)
-        return Projection(foot, seg, station, offset, tangent, distance)
 
 
 def _bounding_circles(start: FloatArray, delta: FloatArray) -> FloatArray:

@@ -13,8 +13,10 @@ are theirs, and each step stays a function that tests can call alone
   the width is not measured (``bridges.track_estimate``), and step 3a's virtual
   partners (``kernels.partners_needed``, ``kernels.partner_points``), joined
   after the real cones.
-- ``project_around`` (classification): the window's origin, the window's
-  test and the search with its projections (``PathProjector.project_around``).
+- ``project_around`` (classification): the window's origin, then
+  ``project_window`` (``PathProjector.project_around``).
+- ``project_window``: the window's test and the search with its projections
+  (``PathProjector.project``).
 - ``plan_midpoints``: after the triangulation, step 3's edges and bridges
   (``kernels.delaunay_edges``, ``kernels.find_bridges``), step 4's ordering
   (``kernels.ordered_midpoints``) and the boundary edges step 6 checks against
@@ -200,9 +202,8 @@ def project_around(  # noqa: PLR0917
         ``kernels.nearest_segments``' segments, then ``kernels.project_rows``'
         foot, station, offset, tangent and distance.
     """
-    windowed = False
-    middle = 0.0
-    half = 0.0
+    lo = 0.0
+    hi = 0.0
     if penalty > 0.0:
         if not has_centre:
             last = points[-1:]
@@ -212,10 +213,45 @@ def project_around(  # noqa: PLR0917
             centre = kernels.project_rows(last, seg, t, d2, table)[1][0]
         lo = centre - back
         hi = centre + ahead
-        windowed = kernels.window_overlaps(lo, hi, table, length, closed, half_max)
-        if windowed:
-            middle = 0.5 * (lo + hi)
-            half = 0.5 * (hi - lo)
+    return project_window(
+        points, table, blocks, size, penalty > 0.0, lo, hi, penalty, length, closed, half_max
+    )
+
+
+@_compiled
+def project_window(  # noqa: PLR0917
+    points, table, blocks, size, has_window, lo, hi, penalty, length, closed, half_max
+):  # fmt: skip
+    """``PathProjector.project`` in one call: the window's test, then the search.
+
+    The window [lo, hi] applies when ``has_window``, ``penalty > 0`` and a
+    segment overlaps it (``kernels.window_overlaps``); then every point's
+    search (``kernels.nearest_segments``, segments outside the window
+    ``penalty`` farther) and projection (``kernels.project_rows``).
+
+    Args:
+        points: (n, 2) [m], C-contiguous.
+        table: the projector's (k, 9) segment table.
+        blocks: its (b, 3) bounding circles of ``size`` segments each.
+        has_window: whether [lo, hi] is a window to prefer.
+        lo: the window's first station [m] ...
+        hi: ... and its last [m] (wrapped on a closed path).
+        penalty: added to segments outside the window [m]; <= 0: no window.
+        length: the path's length [m].
+        closed: whether stations wrap.
+        half_max: half the longest segment [m].
+
+    Returns:
+        ``kernels.nearest_segments``' segments, then ``kernels.project_rows``'
+        foot, station, offset, tangent and distance.
+    """
+    windowed = (
+        has_window
+        and penalty > 0.0
+        and kernels.window_overlaps(lo, hi, table, length, closed, half_max)
+    )
+    middle = 0.5 * (lo + hi) if windowed else 0.0
+    half = 0.5 * (hi - lo) if windowed else 0.0
     seg, t, d2 = kernels.nearest_segments(
         points, table, blocks, size, windowed, middle, half, penalty if windowed else 0.0,
         length, closed,

@@ -69,7 +69,9 @@ def test_window_shortcut_is_the_segment_mask(closed: bool) -> None:
         for back, ahead in ((20.0, 35.0), (0.0, 0.0), (0.05, 0.05), (0.0, 1e-3), (3.0, 0.0)):
             window = (centre - back, centre + ahead)
             expected = bool(window_mask(projector, *window).any())
-            assert (projector._preference(window, 2.0) is not None) == expected, window
+            table, half_max = projector._table, projector._half_max
+            got = kernels.window_overlaps(*window, table, length, closed, half_max)
+            assert got == expected, window
 
 
 def test_cones_to_sensor_maps_points_and_tangents_in_one_call() -> None:

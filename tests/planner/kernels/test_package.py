@@ -132,7 +132,7 @@ for pilot in pilots:
 assert ok > 30, ok
 assert loaded() == after_warm_up, (after_warm_up, loaded())
 assert {"profile_limits", "profile_passes", "spline_path", "project_around", "plan_cones",
-        "plan_midpoints", "window_overlaps"} <= {k.rsplit(".", 1)[1] for k in loaded()}
+        "plan_midpoints", "project_window"} <= {k.rsplit(".", 1)[1] for k in loaded()}
 print("ok")
 """
     run_child(script)

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_array_equal
 
-from conesim.planner.geometry import PathProjector
+from conesim.planner import geometry, kernels
+from conesim.planner.geometry import PathProjector, Projection
 from tests.planner.kernels.geometry_reference import axis_difference
 from tests.planner.kernels.helpers import loop_projector
 
@@ -43,6 +44,21 @@ def ref_projection(
     return seg, t[rows, seg], d2[rows, seg]
 
 
+def searched(
+    projector: PathProjector, points: np.ndarray, prefer: tuple[float, float, float] | None
+) -> Projection:
+    """The kernels' search and projection with the window ``prefer`` (centre, half width,
+    penalty) [m], None for none, as ``kernel_chains.project_window`` calls them."""
+    centre, half, penalty = (0.0, 0.0, 0.0) if prefer is None else prefer
+    table = projector._table
+    seg, t, d2 = kernels.nearest_segments(
+        points, table, projector._blocks, geometry._BLOCK, prefer is not None, centre, half,
+        penalty, projector.length, projector.closed,
+    )  # fmt: skip
+    foot, station, offset, tangent, distance = kernels.project_rows(points, seg, t, d2, table)
+    return Projection(foot, seg, station, offset, tangent, distance)
+
+
 @pytest.mark.parametrize("closed", [True, False])
 @pytest.mark.parametrize("grid", [False, True])
 @pytest.mark.parametrize("prefer", [None, (5.0, 27.5, 2.0), (150.0, 27.5, math.inf), (0, 3, 0.5)])
@@ -56,7 +72,7 @@ def test_nearest_segments_is_the_exhaustive_search(
         points = rng.uniform(-45.0, 45.0, (60, 2))
         if grid:
             points = np.round(points * 2.0) / 2.0
-        got = projector._project(np.ascontiguousarray(points), prefer)
+        got = searched(projector, np.ascontiguousarray(points), prefer)
         seg, t, d2 = ref_projection(projector, points, prefer)
         assert_array_equal(got.segment, seg)
         assert_array_equal(got.distance, np.sqrt(d2))
