@@ -205,16 +205,7 @@ def estimate_track(pairs: PairTable, config: MidlineConfig) -> TrackEstimate:
     width, centre, measured = kernels.estimate_track(
         pairs.dist, pairs.same_stretch, pairs.span, pairs.middle, config.view_settings
     )
-    return track_estimate(width, centre, measured, config)
-
-
-def track_estimate(
-    width: float, centre: float, measured: bool, config: MidlineConfig
-) -> TrackEstimate:
-    """The estimate from a kernel's (width, centre, measured): nominal when not measured."""
-    if not measured:
-        return TrackEstimate(config.nominal_track_width, 0.0, measured=False)
-    return TrackEstimate(float(width), float(centre), measured=True)
+    return TrackEstimate(float(width), float(centre), bool(measured))
 
 
 def virtual_partners(

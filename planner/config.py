@@ -257,14 +257,14 @@ class MidlineConfig(Settings):
             max_track_width=float(self.max_track_width),
             max_bridge_length=float(self.max_bridge_length),
             min_width_samples=int(self.min_width_samples),
+            nominal_track_width=float(self.nominal_track_width),
             boundary_tolerance=float(self.boundary_tolerance),
         )
 
     @cached_property
     def partner_settings(self) -> PartnerSettings:
-        """Step 3a's settings: the nominal width, the partners' radius and tolerance."""
+        """Step 3a's settings: the partners' radius and offset tolerance."""
         return PartnerSettings(
-            nominal_track_width=float(self.nominal_track_width),
             partner_radius=float(self.partner_radius),
             partner_offset_tolerance=float(self.partner_offset_tolerance),
         )

@@ -9,8 +9,7 @@ dozen cones. They call the very step kernels the steps' typed wrappers call
 are theirs, and each step stays a function that tests can call alone
 (``tests/planner/test_kernel_chains.py``).
 
-- ``plan_cones``: step 2 (``kernels.boundary_cones``), the nominal track when
-  the width is not measured (``bridges.track_estimate``), and step 3a's virtual
+- ``plan_cones``: step 2 (``kernels.boundary_cones``) and step 3a's virtual
   partners (``kernels.partners_needed``, ``kernels.partner_points``), joined
   after the real cones.
 - ``project_around`` (classification): the window's origin, then
@@ -74,9 +73,6 @@ def plan_cones(points, side, offset, station, tangent, length, closed, view, par
     keep, left, right, dist, same, _, _, width, centre, measured = kernels.boundary_cones(
         points, side, offset, station, length, closed, view
     )
-    if not measured:  # bridges.track_estimate
-        width = partners.nominal_track_width
-        centre = 0.0
     k = len(keep)
     real_side = side[keep]
     real_offset = offset[keep]

@@ -53,7 +53,6 @@ from conesim.planner.bridges import (
     PairTable,
     TrackEstimate,
     delaunay_simplices,
-    track_estimate,
 )
 from conesim.planner.classify import LEFT, RIGHT, ClassifiedCones
 from conesim.planner.config import MidlineConfig, SpeedProfileConfig
@@ -206,7 +205,7 @@ def boundary_cones(
     )
     real = cones if len(keep) == len(cones) else cones.select(keep)
     pairs = PairTable(left, right, dist, same, span, middle)
-    track = track_estimate(width, centre, measured, config)
+    track = TrackEstimate(float(width), float(centre), bool(measured))
     return real, pairs, track, len(cones) - len(real)
 
 

@@ -27,6 +27,7 @@ class ViewSettings(NamedTuple):
         max_track_width: ... and at most this [m].
         max_bridge_length: a pair's cones are at most this far apart [m].
         min_width_samples: pairs needed to measure the width [-].
+        nominal_track_width: the width when it is not measured [m].
         boundary_tolerance: a cone more than this inside its boundary line
             is dropped once the track is measured [m].
     """
@@ -40,6 +41,7 @@ class ViewSettings(NamedTuple):
     max_track_width: float
     max_bridge_length: float
     min_width_samples: int
+    nominal_track_width: float
     boundary_tolerance: float
 
 
@@ -47,14 +49,12 @@ class PartnerSettings(NamedTuple):
     """Step 3a (``kernels.partners_needed``): the virtual partners.
 
     Attributes:
-        nominal_track_width: the width across when it is not measured [m].
         partner_radius: a cone with a cone of the other side this close has
             no virtual partner [m].
         partner_offset_tolerance: only a cone this close to its boundary line
             gets one [m].
     """
 
-    nominal_track_width: float
     partner_radius: float
     partner_offset_tolerance: float
 

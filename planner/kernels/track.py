@@ -162,9 +162,10 @@ def median(values):
 
 @_compiled
 def estimate_track(dist, same, span, middle, view):
-    """``bridges.estimate_track``: (width, centre, measured); measured False gives (0, 0).
+    """``bridges.estimate_track``: (width, centre, measured) [m, m, -].
 
-    ``view`` is a ``settings.ViewSettings`` (its span, length and sample count).
+    Not measured: the nominal width and centre 0. ``view`` is a
+    ``settings.ViewSettings`` (its span, length, sample count and nominal width).
     """
     min_width = view.min_track_width
     max_width = view.max_track_width
@@ -202,7 +203,7 @@ def estimate_track(dist, same, span, middle, view):
             picks_c[m] = c
             m += 1
     if rows == 0 or m < min_samples:
-        return 0.0, 0.0, False
+        return view.nominal_track_width, 0.0, False
     widths = np.empty(m)
     centres = np.empty(m)
     for q in range(m):
@@ -234,8 +235,8 @@ def boundary_cones(points, side, offset, station, length, closed, view):  # noqa
     The cones in view; their pair table and the track estimate; when
     measured, the cones more than ``view.boundary_tolerance`` inside their
     boundary line dropped and the pair table rebuilt. The width and centre
-    are 0 when not measured (the caller puts in the nominal track). ``view``
-    is a ``settings.ViewSettings``.
+    are the nominal width and 0 when not measured. ``view`` is a
+    ``settings.ViewSettings``.
     """
     keep = true_rows(in_view(points, offset, view))
     pts = points[keep]
