@@ -32,6 +32,7 @@ from conesim.planner.settings import (
     PartnerSettings,
     PassSettings,
     ViewSettings,
+    from_fields,
 )
 
 
@@ -247,53 +248,22 @@ class MidlineConfig(Settings):
     @cached_property
     def view_settings(self) -> ViewSettings:
         """Step 2's settings: the view, the pairing, the track estimate, the tolerance."""
-        return ViewSettings(
-            min_x=float(self.min_x),
-            max_range=float(self.max_range),
-            min_boundary_offset=float(self.min_boundary_offset),
-            max_boundary_offset=float(self.max_boundary_offset),
-            max_station_gap=float(self.max_station_gap),
-            min_track_width=float(self.min_track_width),
-            max_track_width=float(self.max_track_width),
-            max_bridge_length=float(self.max_bridge_length),
-            min_width_samples=int(self.min_width_samples),
-            nominal_track_width=float(self.nominal_track_width),
-            boundary_tolerance=float(self.boundary_tolerance),
-        )
+        return from_fields(ViewSettings, self)
 
     @cached_property
     def partner_settings(self) -> PartnerSettings:
         """Step 3a's settings: the partners' radius and offset tolerance."""
-        return PartnerSettings(
-            partner_radius=float(self.partner_radius),
-            partner_offset_tolerance=float(self.partner_offset_tolerance),
-        )
+        return from_fields(PartnerSettings, self)
 
     @cached_property
     def bridge_settings(self) -> BridgeSettings:
         """Step 3's checks: span, length, station gap, width tolerance and selection."""
-        return BridgeSettings(
-            min_track_width=float(self.min_track_width),
-            max_track_width=float(self.max_track_width),
-            max_bridge_length=float(self.max_bridge_length),
-            max_station_gap=float(self.max_station_gap),
-            width_tolerance=float(self.width_tolerance),
-            shortest=self.bridge_selection == "shortest",
-        )
+        return from_fields(BridgeSettings, self, shortest=self.bridge_selection == "shortest")
 
     @cached_property
     def ordering_settings(self) -> OrderingSettings:
         """Step 4's settings: the start's, then the chain's."""
-        return OrderingSettings(
-            start_min_x=float(self.start_min_x),
-            start_station_back=float(self.start_station_back),
-            start_station_ahead=float(self.start_station_ahead),
-            max_step=float(self.max_step),
-            max_station_step=float(self.max_station_step),
-            station_back_tolerance=float(self.station_back_tolerance),
-            min_step_advance=float(self.min_step_advance),
-            min_midpoint_spacing=float(self.min_midpoint_spacing),
-        )
+        return from_fields(OrderingSettings, self)
 
 
 @dataclass(frozen=True)
@@ -352,28 +322,14 @@ class SpeedProfileConfig(Settings):
     @cached_property
     def limit_settings(self) -> LimitSettings:
         """Step 7's limits: curvature window, lateral limits, the jerk limit and its window."""
-        return LimitSettings(
-            curvature_window=float(self.curvature_window),
-            a_lat_max=float(self.a_lat_max),
-            a_lat_aero=float(self.a_lat_aero),
-            curvature_floor=float(self.a_lat_max / self.v_max**2),  # as curvature_limit's
-            v_max=float(self.v_max),
-            lateral_jerk_max=float(self.lateral_jerk_max),
-            jerk_window=float(self.jerk_window),
-        )
+        # as the curvature limit's floor: below it v_max binds
+        floor = float(self.a_lat_max / self.v_max**2)
+        return from_fields(LimitSettings, self, curvature_floor=floor)
 
     @cached_property
     def pass_settings(self) -> PassSettings:
         """Step 7's passes: the ellipse, drive and brake limits, lateral limits, the stop."""
-        return PassSettings(
-            friction_ellipse=bool(self.friction_ellipse),
-            a_drive=float(self.a_drive),
-            a_brake=float(self.a_brake),
-            a_lat_max=float(self.a_lat_max),
-            a_lat_aero=float(self.a_lat_aero),
-            horizon_stop=bool(self.horizon_stop),
-            brake=True,
-        )
+        return from_fields(PassSettings, self, brake=True)
 
 
 @dataclass(frozen=True)

@@ -183,20 +183,15 @@ def project_around(  # noqa: PLR0917
 
     Args:
         points: (n, 2) [m], n >= 1, C-contiguous; the last is the origin's point.
-        table: the projector's (k, 9) segment table.
-        blocks: its (b, 3) bounding circles of ``size`` segments each.
+        table, blocks, size, penalty, length, closed, half_max: as
+            ``project_window``'s.
         back: the window starts this far behind the origin [m] ...
         ahead: ... and ends this far ahead [m].
-        penalty: added to segments outside the window [m]; <= 0: no window.
         has_centre: whether ``centre`` is the origin's station.
         centre: the origin's station [m] (read when ``has_centre``).
-        length: the path's length [m].
-        closed: whether stations wrap.
-        half_max: half the longest segment [m].
 
     Returns:
-        ``kernels.nearest_segments``' segments, then ``kernels.project_rows``'
-        foot, station, offset, tangent and distance.
+        ``project_window``'s.
     """
     lo = 0.0
     hi = 0.0

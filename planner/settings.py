@@ -2,16 +2,37 @@
 
 numba takes a ``NamedTuple`` as one argument and reads its fields by name in
 compiled code, so each kernel gets its group whole instead of a long run of
-positional scalars. Each group is built once per settings object, from the
-frozen dataclass of ``planner.config`` whose fields have the same names
+positional scalars. Each group is built once per settings object
 (``MidlineConfig.view_settings`` ..., ``SpeedProfileConfig.limit_settings``,
-``pass_settings``), with floats as ``float``, counts as ``int`` and switches
-as ``bool``: one type per field, so one compiled specialisation per kernel.
+``pass_settings``) by ``from_fields``, from the frozen dataclass of
+``planner.config`` whose fields have the same names, with floats as
+``float``, counts as ``int`` and switches as ``bool``: one type per field,
+so one compiled specialisation per kernel.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple, TypeVar, get_type_hints
+
+_Group = TypeVar("_Group", bound=tuple[Any, ...])
+
+
+def from_fields(group: type[_Group], source: object, **computed: Any) -> _Group:
+    """The settings group ``group`` with ``source``'s attributes of the same names.
+
+    Each field is ``source``'s attribute converted to the field's type
+    (``float``, ``int`` or ``bool``), or, for a field ``source`` has not, the
+    value given in ``computed``.
+
+    Raises:
+        AttributeError: a field neither ``source`` nor ``computed`` has.
+    """
+    types = get_type_hints(group)
+    values = {
+        name: computed[name] if name in computed else types[name](getattr(source, name))
+        for name in types
+    }
+    return group(**values)
 
 
 class ViewSettings(NamedTuple):
