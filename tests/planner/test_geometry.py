@@ -37,7 +37,7 @@ def test_seed_projection_on_one_segment() -> None:
 
 
 def test_projection_is_the_exact_nearest_segment() -> None:
-    """The k-d tree search finds the same nearest distance as testing every segment."""
+    """The bounded search finds the same nearest distance as testing every segment."""
     rng = np.random.default_rng(0)
     s = np.linspace(0.0, 2 * math.pi, 400, endpoint=False)
     xy = np.column_stack([30 * np.cos(s) + 3 * np.cos(7 * s), 20 * np.sin(s)])

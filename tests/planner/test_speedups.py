@@ -41,7 +41,7 @@ def loop_path(closed: bool = True) -> PathProjector:
 def test_project_around_is_the_two_step_projection(
     closed: bool, penalty: float, hint: float | None
 ) -> None:
-    """One shared k-d tree query: the sensor projected alone, then all with the window."""
+    """``project_around`` in one call: the sensor projected alone, then all with the window."""
     projector = loop_path(closed)
     rng = np.random.default_rng(1)
     for _ in range(20):

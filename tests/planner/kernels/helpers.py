@@ -9,9 +9,7 @@ boundary offsets and the track estimate as they stood before the kernels
 Each test's reference is the numpy formulation the kernel replaced (as it
 stood before the kernels), compared exactly on random inputs that include
 ties (points on a grid), zero-length steps and closed (wrapped) station
-axes. The whole planning step was also compared before and after on 718
-recorded scenes (synthetic winding tracks and every shipped track, ideal and
-noisy detectors): identical outputs.
+axes.
 """
 
 from __future__ import annotations
