@@ -6,9 +6,9 @@ Steps of ``reference_path_planning`` that work on cones in ``os_sensor``:
    medians over each cone's nearest valid partner (the checks of step 3) of
    the offset difference and the mean offset. A cone more than
    ``boundary_tolerance`` inside its boundary line (``kernels.boundary_offset``)
-   is then dropped: a false positive on the track, or a
-   cone labelled against its position (misclassified), would otherwise take
-   the Delaunay edges of the real bridges around it.
+   is then dropped: a false positive on the track, or a cone labelled against
+   its position (misclassified), would otherwise take the Delaunay edges of
+   the real bridges around it.
 1. ``virtual_partners``: a cone with no cone of the other side within
    ``partner_radius`` (and ``max_station_gap`` of station), whose offset is
    within ``partner_offset_tolerance`` of its boundary line (a boundary cone,

@@ -11,8 +11,8 @@ The seed's node, step by step (each step named as a function):
    inside their boundary line (``bridges.estimate_track``).
 3. ``virtual_partners``, ``delaunay_edges``, ``find_bridges`` (``bridges``):
    Delaunay on all cones, the checked left-right bridges and their midpoints.
-4. ``ordered_midpoints`` (``kernels.ordering``): the used bridges' midpoints from the
-   nearest one in front, chaining nearest neighbours.
+4. ``ordered_midpoints`` (``kernels.ordering``): the used bridges' midpoints
+   from the nearest one in front, chaining nearest neighbours.
 5. ``fit_path`` (``spline``): B-spline through them, resampled every 0.5 m.
 6. ``check_path``: at least two midpoints, at least ``min_path_length`` long,
    starting within ``max_start_distance``, and crossing no boundary edge.
