@@ -20,8 +20,8 @@ are theirs, and each step stays a function that tests can call alone
   (``kernels.delaunay_edges``, ``kernels.find_bridges``), step 4's ordering
   (``kernels.ordered_midpoints``) and the boundary edges step 6 checks against
   (``kernels.boundary_edges``, gathered into segments).
-- ``check_and_limit``: after the spline, step 6's arc length and crossing
-  test (``kernels.arc_length``, ``kernels.crosses_boundary``) and step 7's
+- ``check_and_limit``: after the spline, step 6's arc length, start distance
+  and crossing test (``kernels.arc_length``, ``kernels.crosses_boundary``) and step 7's
   speed limits (``kernels.profile_limits``; the cube root and the passes
   follow in ``speed_profile.profile_speeds``).
 
@@ -34,6 +34,8 @@ function here calls, run ``make clean-cache``.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -253,7 +255,7 @@ def project_window(  # noqa: PLR0917
 
 @_compiled
 def check_and_limit(path, boundary, profile, limits):
-    """Step 6's arc length and crossing test, and step 7's limits, for a fresh path.
+    """Step 6's numbers (arc length, start distance, crossing) and step 7's limits.
 
     Args:
         path: (p, 2) the fitted path [m], C-contiguous.
@@ -263,13 +265,16 @@ def check_and_limit(path, boundary, profile, limits):
             (``SpeedProfileConfig.limit_settings``).
 
     Returns:
-        The arc length (max(p, 1),) [m] (``kernels.arc_length``), whether the
-        path crosses a boundary segment (``kernels.crosses_boundary``), and
+        The arc length (max(p, 1),) [m] (``kernels.arc_length``) and its last
+        value [m], the first point's distance from the origin [m]
+        (``np.hypot``; NaN without points), whether the path crosses a
+        boundary segment (``kernels.crosses_boundary``), and
         ``kernels.profile_limits``' (s, kappa, v, ratio) given that arc length
         (the arc length four times, unread, without ``profile`` or points).
     """
     s = kernels.arc_length(path)
+    start = np.hypot(path[0, 0], path[0, 1]) if len(path) > 0 else math.nan
     crosses = kernels.crosses_boundary(path, boundary)
     if profile and len(path) > 0:
-        return s, crosses, kernels.profile_limits(path, s, True, limits)
-    return s, crosses, (s, s, s, s)
+        return s, s[len(s) - 1], start, crosses, kernels.profile_limits(path, s, True, limits)
+    return s, s[len(s) - 1], start, crosses, (s, s, s, s)

@@ -29,8 +29,8 @@ step 3's triangulation and step 5's fit are scipy's), and
 ``reference_path_planning`` runs the compiled steps between two scipy calls
 in one call each (``planner.kernel_chains``): steps 2 and 3a in
 ``cones_with_partners``, steps 3 and 4 after the triangulation in
-``bridges_and_midpoints``, step 6's arc length and crossing test with step
-7's limits after the spline in ``kernel_chains.check_and_limit``, each
+``bridges_and_midpoints``, step 6's numbers with step 7's limits after the
+spline in ``kernel_chains.check_and_limit``, each
 given its settings groups (``MidlineConfig.view_settings`` ...,
 ``SpeedProfileConfig.limit_settings``, built once per config).
 """
@@ -292,6 +292,7 @@ def check_path(
     length: float | None = None,
     *,
     crosses: bool | None = None,
+    start: float | None = None,
 ) -> str:
     """Step 6: why the path is not sound, or "" when it is.
 
@@ -303,6 +304,8 @@ def check_path(
         length: the path's length [m] if known (``arc_length(path)[-1]``).
         crosses: whether it crosses a boundary edge, if known
             (``crosses_boundary(path, boundary)``).
+        start: the first point's distance from the sensor [m], if known
+            (``np.hypot(*path[0])``).
     """
     if n_midpoints < 2:
         return f"{n_midpoints} ordered midpoints (need 2)"
@@ -310,7 +313,8 @@ def check_path(
         length = float(arc_length(path)[-1])
     if length < config.min_path_length:
         return f"path {length:.2f} m long (need {config.min_path_length} m)"
-    start = float(np.hypot(path[0, 0], path[0, 1]))
+    if start is None:
+        start = float(np.hypot(path[0, 0], path[0, 1]))
     if start > config.max_start_distance:
         return f"path starts {start:.2f} m away (max {config.max_start_distance} m)"
     if crosses is None:
@@ -395,12 +399,14 @@ def reference_path_planning(
         cone_set, delaunay_simplices(cone_set.points), config, track, cones.sensor_station
     )
     path = np.ascontiguousarray(fit_path(midpoints, config, midpoints_length), dtype=float)
-    # The arc length for the check and the speed profile, the crossing test
-    # and the profile's limits: one compiled call.
-    s, crosses, limits = kernel_chains.check_and_limit(
+    # The check's numbers, the arc length for the speed profile and the
+    # profile's limits: one compiled call.
+    s, length, start, crosses, limits = kernel_chains.check_and_limit(
         path, boundary, speeds is None, (speed_config or _DEFAULT_SPEED).limit_settings
     )
-    reason = check_path(path, len(midpoints), boundary, config, float(s[-1]), crosses=crosses)
+    reason = check_path(
+        path, len(midpoints), boundary, config, length, crosses=crosses, start=start
+    )
     status = PlanStatus.OK
     if reason:
         carried = carry_path_forward(previous, buffer, stamp, cones.header.frame_id, sensor_frame)

@@ -43,6 +43,7 @@ with ``numpy.cbrt``, whose SIMD (SVML) cube root is not libm's.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -162,19 +163,24 @@ def forward_pass(s: FloatArray, v_limit: FloatArray, a_drive: float) -> FloatArr
         raise ValueError(
             f"forward_pass: s and v_limit must be (n,) alike, got {arc.shape} and {v.shape}"
         )
-    drive_only = PassSettings(
+    speeds: FloatArray = kernels.profile_passes(
+        arc, _EMPTY, v, _EMPTY, False, 0.0, False, 0.0, _drive_only(float(a_drive))
+    )
+    return speeds
+
+
+@functools.lru_cache(maxsize=8)
+def _drive_only(a_drive: float) -> PassSettings:
+    """``forward_pass``' settings: the closed-form drive pass at ``a_drive`` [m/s^2] alone."""
+    return PassSettings(
         friction_ellipse=False,
-        a_drive=float(a_drive),
+        a_drive=a_drive,
         a_brake=0.0,
         a_lat_max=0.0,
         a_lat_aero=0.0,
         horizon_stop=False,
         brake=False,
     )
-    speeds: FloatArray = kernels.profile_passes(
-        arc, _EMPTY, v, _EMPTY, False, 0.0, False, 0.0, drive_only
-    )
-    return speeds
 
 
 def profile_curvature(points: FloatArray, config: SpeedProfileConfig | None = None) -> FloatArray:

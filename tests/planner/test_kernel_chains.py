@@ -93,8 +93,9 @@ def test_no_cones_in_view() -> None:
 
 @pytest.mark.parametrize("profile", [True, False])
 def test_check_and_limit_is_the_steps(profile: bool) -> None:
-    """``kernel_chains.check_and_limit`` and ``profile_speeds``: the arc length, the crossing
-    test and ``speed_profile``'s speeds, for paths that cross the boundary and not."""
+    """``kernel_chains.check_and_limit`` and ``profile_speeds``: the arc length, the start
+    distance (``np.hypot``, also from 1 mm to 1 km), the crossing test and
+    ``speed_profile``'s speeds, for paths that cross the boundary and not."""
     rng = np.random.default_rng(43)
     configs = [
         SpeedProfileConfig(),
@@ -104,12 +105,15 @@ def test_check_and_limit_is_the_steps(profile: bool) -> None:
     for trial in range(60):
         n = int(rng.integers(1, 60))
         path = np.cumsum(rng.normal(0.5, 0.2, (n, 2)), axis=0)
+        path[0] *= 10.0 ** rng.uniform(-3.0, 3.0)
         boundary = rng.uniform(-5.0, 30.0, (int(rng.integers(0, 8)), 2, 2))
         config = configs[trial % len(configs)]
-        s, crosses, limits = kernel_chains.check_and_limit(
+        s, length, start, crosses, limits = kernel_chains.check_and_limit(
             path, boundary, profile, config.limit_settings
         )
         assert_array_equal(s, arc_length(path))
+        assert length == s[-1]
+        assert start == float(np.hypot(path[0, 0], path[0, 1]))
         assert crosses == kernels.crosses_boundary(path, boundary)
         if profile:
             v_start = None if trial % 2 else float(rng.uniform(0.0, 10.0))
