@@ -40,8 +40,8 @@ bench: $(STAMP)
 
 # numba's cached kernels: a cached kernel is checked against its own file only,
 # so after editing a kernel that another file's kernels call
-# (planner/kernels/_common.py, or a step kernel that planner/fused.py chains),
-# clear them; the next run compiles afresh.
+# (planner/kernels/_common.py, or a step kernel that planner/kernel_chains.py
+# chains), clear them; the next run compiles afresh.
 clean-cache:
 	find conesim sim localization planner envs tracks -name __pycache__ -type d -prune -exec rm -rf {} +
 

@@ -5,10 +5,10 @@ Steps of ``reference_path_planning`` that work on cones in ``os_sensor``:
 0. ``estimate_track``: the width and middle of the track in view, as the
    medians over each cone's nearest valid partner (the checks of step 3) of
    the offset difference and the mean offset. A cone more than
-   ``boundary_tolerance`` inside its boundary line (``TrackEstimate.
-   boundary_offset``) is then dropped: a false positive on the track, or a
-   cone labelled against its position (misclassified), would otherwise take
-   the Delaunay edges of the real bridges around it.
+   ``boundary_tolerance`` inside its boundary line (``kernels.boundary_offset``)
+   is then dropped: a false positive on the track, or a cone labelled against
+   its position (misclassified), would otherwise take the Delaunay edges of
+   the real bridges around it.
 1. ``virtual_partners``: a cone with no cone of the other side within
    ``partner_radius`` (and ``max_station_gap`` of station), whose offset is
    within ``partner_offset_tolerance`` of its boundary line (a boundary cone,
@@ -43,18 +43,13 @@ Steps of ``reference_path_planning`` that work on cones in ``os_sensor``:
    below the minimum width, same stretch of track), which a sound path may not
    cross.
 
-Written for speed (it runs per detection on a few dozen cones, where numpy's
-per-call overhead dominates): the pair table, the track estimate, the
-partners' selection and positions, the edges from scipy's simplices, the bridge checks and
-the boundary edges are compiled loops (``planner.kernels``) with the numbers
-of the numpy code they replaced; medians are taken with one sort
-(``median``, the same number as ``numpy.median``), and a view with no
-virtual partner skips building and joining them.
+The functions here are the steps' typed entry points, one per kernel
+(``planner.kernels``: compiled, as they run per detection); the planning
+step runs them chained (``planner.kernel_chains``).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -100,10 +95,6 @@ class ConeSet:
     def __len__(self) -> int:
         return len(self.points)
 
-    def station_gap(self, i: IntArray, j: IntArray) -> FloatArray:
-        """|station[j] - station[i]|, wrapped on a closed path [m]."""
-        return np.abs(self.axis.difference(self.station[j], self.station[i]))
-
     def select(self, keep: BoolArray | IntArray) -> ConeSet:
         """The cones where ``keep`` (mask or indices)."""
         if keep.dtype == np.bool_:  # compress and take: faster than [] on (n, 2)
@@ -123,20 +114,6 @@ class ConeSet:
             station=self.station.take(keep),
             tangent=self.tangent.take(keep, axis=0),
             virtual=self.virtual.take(keep),
-            axis=self.axis,
-        )
-
-    def join(self, other: ConeSet) -> ConeSet:
-        """This set followed by ``other`` (this set itself when ``other`` is empty)."""
-        if len(other) == 0:
-            return self
-        return ConeSet(
-            points=np.concatenate([self.points, other.points]),
-            side=np.concatenate([self.side, other.side]),
-            offset=np.concatenate([self.offset, other.offset]),
-            station=np.concatenate([self.station, other.station]),
-            tangent=np.concatenate([self.tangent, other.tangent]),
-            virtual=np.concatenate([self.virtual, other.virtual]),
             axis=self.axis,
         )
 
@@ -215,14 +192,6 @@ class TrackEstimate:
     centre: float
     measured: bool
 
-    def boundary_offset(self, cones: ConeSet) -> FloatArray:
-        """(n,) how far each cone lies outside its boundary line, as seen from its side [m].
-
-        ``side * (offset - centre) - width / 2``: 0 on the boundary, < 0 inside
-        the track, > 0 outside; a cone labelled against its position is far inside.
-        """
-        return cones.side * (cones.offset - self.centre) - 0.5 * self.width
-
 
 def estimate_track(pairs: PairTable, config: MidlineConfig) -> TrackEstimate:
     """Median width and centre offset of the track in view.
@@ -234,41 +203,9 @@ def estimate_track(pairs: PairTable, config: MidlineConfig) -> TrackEstimate:
     ``kernels.estimate_track``.
     """
     width, centre, measured = kernels.estimate_track(
-        pairs.dist,
-        pairs.same_stretch,
-        pairs.span,
-        pairs.middle,
-        config.min_track_width,
-        config.max_track_width,
-        config.max_bridge_length,
-        config.min_width_samples,
+        pairs.dist, pairs.same_stretch, pairs.span, pairs.middle, config.view_settings
     )
-    return track_estimate(width, centre, measured, config)
-
-
-def track_estimate(
-    width: float, centre: float, measured: bool, config: MidlineConfig
-) -> TrackEstimate:
-    """The estimate from a kernel's (width, centre, measured): nominal when not measured."""
-    if not measured:
-        return TrackEstimate(config.nominal_track_width, 0.0, measured=False)
-    return TrackEstimate(float(width), float(centre), measured=True)
-
-
-def median(values: FloatArray) -> float:
-    """``float(numpy.median(values))`` of a non-empty 1-D array, with one sort.
-
-    The middle value, or the mean of the two middle values as ``(a + b) / 2``
-    (what ``numpy.median`` computes); NaN if any value is NaN.
-    """
-    ordered = np.sort(values)  # NaNs last
-    n = len(ordered)
-    half = n // 2
-    if math.isnan(ordered[-1]):
-        return math.nan
-    if n % 2:
-        return float(ordered[half])
-    return float((ordered[half - 1] + ordered[half]) / 2.0)
+    return TrackEstimate(float(width), float(centre), bool(measured))
 
 
 def virtual_partners(
@@ -294,10 +231,9 @@ def virtual_partners(
         pairs.right,
         pairs.same_stretch,
         pairs.dist,
-        config.partner_radius,
         track.centre,
         track.width,
-        config.partner_offset_tolerance,
+        config.partner_settings,
     )
     if len(need) == 0:
         return _no_cones(cones.axis)
@@ -377,11 +313,9 @@ def find_bridges(
         cones.virtual,
         cones.axis.length,
         cones.axis.closed,
-        *config.bridge_settings,
         check_width,
         track.width if track is not None else 0.0,
-        config.width_tolerance,
-        config.bridge_selection == "shortest",
+        config.bridge_settings,
     )
     return Bridges(left, right, length, valid, used, midpoints, station)
 
@@ -395,7 +329,6 @@ def boundary_edges(cones: ConeSet, edges: IntArray, config: MidlineConfig) -> In
         cones.station,
         cones.axis.length,
         cones.axis.closed,
-        config.min_track_width,
-        config.max_station_gap,
+        config.bridge_settings,
     )
     return edges.take(rows, axis=0)

@@ -33,7 +33,7 @@ Cones with a non-finite coordinate are dropped and counted (messages do not
 validate their numbers; ``localization.messages``).
 
 Written for speed (it runs per detection): step 2's projections are compiled
-searches (``PathProjector.project_around``, one call into ``planner.fused``),
+searches (``PathProjector.project_around``, one call into ``planner.kernel_chains``),
 step 1's finite rows and step 3's sides are compiled loops
 (``kernels.ground_points``, ``kernels.side_of_path``: one call each instead
 of a few numpy calls), and the default settings are built once.

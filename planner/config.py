@@ -25,6 +25,15 @@ from functools import cached_property
 from typing import Any, Self
 
 from conesim.core.messages import CONE_COLOURS, FRAME_OS_SENSOR, FRAME_REFERENCE
+from conesim.planner.settings import (
+    BridgeSettings,
+    LimitSettings,
+    OrderingSettings,
+    PartnerSettings,
+    PassSettings,
+    ViewSettings,
+    from_fields,
+)
 
 
 def _check(owner: str, name: str, value: float, lo: float, hi: float = math.inf) -> None:
@@ -233,54 +242,28 @@ class MidlineConfig(Settings):
                 f"{owner}.bridge_selection = {self.bridge_selection!r}: allowed 'shortest', 'all'"
             )
 
-    # The settings as the compiled steps (``planner.kernels``) take them, in
-    # their order, gathered once per settings object: the planning step
-    # passes them on each detection.
+    # The groups the compiled steps (``planner.kernels``) read by name, built
+    # once per settings object: the planning step passes them on each detection.
 
     @cached_property
-    def view_settings(self) -> tuple[float, ...]:
-        """``kernels.boundary_cones``' settings: view, pairing, track estimate, tolerance."""
-        return (
-            self.min_x,
-            self.max_range,
-            self.min_boundary_offset,
-            self.max_boundary_offset,
-            self.max_station_gap,
-            self.min_track_width,
-            self.max_track_width,
-            self.max_bridge_length,
-            self.min_width_samples,
-            self.boundary_tolerance,
-        )
+    def view_settings(self) -> ViewSettings:
+        """Step 2's settings: the view, the pairing, the track estimate, the tolerance."""
+        return from_fields(ViewSettings, self)
 
     @cached_property
-    def partner_settings(self) -> tuple[float, float, float]:
-        """The virtual partners': nominal width, radius and offset tolerance [m]."""
-        return (self.nominal_track_width, self.partner_radius, self.partner_offset_tolerance)
+    def partner_settings(self) -> PartnerSettings:
+        """Step 3a's settings: the partners' radius and offset tolerance."""
+        return from_fields(PartnerSettings, self)
 
     @cached_property
-    def bridge_settings(self) -> tuple[float, float, float, float]:
-        """``kernels.find_bridges``' checks: min and max span, max length, max station gap [m]."""
-        return (
-            self.min_track_width,
-            self.max_track_width,
-            self.max_bridge_length,
-            self.max_station_gap,
-        )
+    def bridge_settings(self) -> BridgeSettings:
+        """Step 3's checks: span, length, station gap, width tolerance and selection."""
+        return from_fields(BridgeSettings, self, shortest=self.bridge_selection == "shortest")
 
     @cached_property
-    def ordering_settings(self) -> tuple[float, ...]:
-        """``kernels.ordered_midpoints``' settings: the start's, then the chain's."""
-        return (
-            self.start_min_x,
-            self.start_station_back,
-            self.start_station_ahead,
-            self.max_step,
-            self.max_station_step,
-            self.station_back_tolerance,
-            self.min_step_advance,
-            self.min_midpoint_spacing,
-        )
+    def ordering_settings(self) -> OrderingSettings:
+        """Step 4's settings: the start's, then the chain's."""
+        return from_fields(OrderingSettings, self)
 
 
 @dataclass(frozen=True)
@@ -333,34 +316,20 @@ class SpeedProfileConfig(Settings):
         _check("SpeedProfileConfig", "jerk_window", self.jerk_window, 0.0)
         _check("SpeedProfileConfig", "curvature_window", self.curvature_window, 0.0)
 
-    # The limits as the compiled profile (``planner.kernels``) takes them, in
-    # its order and as floats, gathered once per settings object.
+    # The groups the compiled profile (``planner.kernels``) reads by name, built
+    # once per settings object.
 
     @cached_property
-    def limit_settings(self) -> tuple[float, ...]:
-        """``kernels.profile_limits``' settings: curvature window, lateral limits, the
-        ``v_max`` floor of the curvature, ``v_max``, the jerk limit and its window."""
-        return (
-            float(self.curvature_window),
-            float(self.a_lat_max),
-            float(self.a_lat_aero),
-            self.a_lat_max / self.v_max**2,  # as curvature_limit's floor
-            float(self.v_max),
-            float(self.lateral_jerk_max),
-            float(self.jerk_window),
-        )
+    def limit_settings(self) -> LimitSettings:
+        """Step 7's limits: curvature window, lateral limits, the jerk limit and its window."""
+        # as the curvature limit's floor: below it v_max binds
+        floor = float(self.a_lat_max / self.v_max**2)
+        return from_fields(LimitSettings, self, curvature_floor=floor)
 
     @cached_property
-    def pass_settings(self) -> tuple[bool, float, float, float, float, bool]:
-        """``kernels.profile_passes``' settings: ellipse, drive, brake, lateral limits, stop."""
-        return (
-            bool(self.friction_ellipse),
-            float(self.a_drive),
-            float(self.a_brake),
-            float(self.a_lat_max),
-            float(self.a_lat_aero),
-            bool(self.horizon_stop),
-        )
+    def pass_settings(self) -> PassSettings:
+        """Step 7's passes: the ellipse, drive and brake limits, lateral limits, the stop."""
+        return from_fields(PassSettings, self, brake=True)
 
 
 @dataclass(frozen=True)

@@ -26,16 +26,9 @@ circles holding a window segment are searched first (nearest bound first),
 the others only when the best score reaches ``penalty``, which for a cone
 near the current stretch it does not.
 
-Written for speed (the planner runs this per detection, on a few dozen
-points, where numpy's per-call overhead of about a microsecond dominates):
-the search and the projection's numbers are compiled loops
-(``planner.kernels.nearest_segments``, ``project_rows``; they replaced a k-d
-tree over the midpoints plus numpy glue, twice the time), and so is
-``polyline_crosses``, which tests only the path segments that straddle a
-boundary edge's line and stops at the first crossing. The results are the
-numbers of the straightforward code (same operations per element;
-``tests/planner/kernels/test_projection.py`` keeps the k-d tree version as the
-reference).
+The search, the projection's numbers, the arc length and the crossing test
+(``crosses_boundary``) are compiled (``planner.kernels``): they run per
+detection.
 """
 
 from __future__ import annotations
@@ -46,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from conesim.planner import fused, kernels
+from conesim.planner import kernel_chains, kernels
 from conesim.tracks.global_path import GlobalPath
 
 FloatArray = NDArray[np.float64]
@@ -135,12 +128,6 @@ class PathProjector:
         self.path = path
         self._axis = StationAxis(self.length, self.closed)
 
-    def window_mask(self, lo: float, hi: float) -> NDArray[np.bool_]:
-        """(k,) True for the segments overlapping stations [lo, hi] [m] (wrapped if closed)."""
-        centre = 0.5 * (lo + hi)
-        reach = 0.5 * (hi - lo) + self._half_length
-        return np.abs(self._axis.difference(self._mid_station, centre)) <= reach
-
     def project(
         self,
         points: FloatArray,
@@ -158,7 +145,22 @@ class PathProjector:
                 if no segment is in it), 0 ignores the window.
         """
         p = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
-        return self._project(p, self._preference(window, penalty))
+        lo, hi = (0.0, 0.0) if window is None else (float(window[0]), float(window[1]))
+        # One compiled call: the window's test and the search.
+        seg, foot, station, offset, tangent, distance = kernel_chains.project_window(
+            p,
+            self._table,
+            self._blocks,
+            _BLOCK,
+            window is not None,
+            lo,
+            hi,
+            float(penalty),
+            self.length,
+            self.closed,
+            self._half_max,
+        )
+        return Projection(foot, seg, station, offset, tangent, distance)
 
     def project_around(
         self,
@@ -184,7 +186,7 @@ class PathProjector:
         """
         p = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
         # One compiled call: the origin, the window and the search.
-        seg, foot, station, offset, tangent, distance = fused.project_around(
+        seg, foot, station, offset, tangent, distance = kernel_chains.project_around(
             p,
             self._table,
             self._blocks,
@@ -204,45 +206,6 @@ class PathProjector:
     def axis(self) -> StationAxis:
         """The path's station axis."""
         return self._axis
-
-    def _preference(
-        self, window: tuple[float, float] | None, penalty: float
-    ) -> tuple[float, float, float] | None:
-        """The window as (centre, half width, penalty) [m], or None when it does not apply."""
-        if window is None or not penalty > 0.0:
-            return None
-        lo, hi = float(window[0]), float(window[1])
-        # The segments tile [0, length] (the whole ring when closed): a window
-        # reaching well into that range overlaps one of them, so the mask
-        # over every segment is only needed near or beyond the ends (compiled).
-        if not kernels.window_overlaps(
-            lo, hi, self._table, self.length, self.closed, self._half_max
-        ):
-            return None
-        return (0.5 * (lo + hi), 0.5 * (hi - lo), penalty)
-
-    def _project(self, p: FloatArray, prefer: tuple[float, float, float] | None) -> Projection:
-        """The projections of ``p`` (contiguous (n, 2)) with the window ``prefer``.
-
-        ``prefer`` is the window's (centre, half width, penalty) [m], None for
-        no window. Compiled: the search (``kernels.nearest_segments``) and the
-        projection's numbers (``kernels.project_rows``).
-        """
-        centre, half, penalty = (0.0, 0.0, 0.0) if prefer is None else prefer
-        seg, t, d2 = kernels.nearest_segments(
-            p,
-            self._table,
-            self._blocks,
-            _BLOCK,
-            prefer is not None,
-            centre,
-            half,
-            penalty,
-            self.length,
-            self.closed,
-        )
-        foot, station, offset, tangent, distance = kernels.project_rows(p, seg, t, d2, self._table)
-        return Projection(foot, seg, station, offset, tangent, distance)
 
 
 def _bounding_circles(start: FloatArray, delta: FloatArray) -> FloatArray:
@@ -269,67 +232,20 @@ class StationAxis:
     length: float
     closed: bool
 
-    def difference(self, s_to: FloatArray | float, s_from: FloatArray | float) -> FloatArray:
-        """``s_to - s_from`` [m], wrapped into [-length/2, length/2) on a closed path."""
-        return station_difference(s_to, s_from, self.length, self.closed)
 
-
-def station_difference(
-    s_to: FloatArray | float, s_from: FloatArray | float, length: float, closed: bool
-) -> FloatArray:
-    """Station difference ``s_to - s_from`` [m], wrapped on a closed path of ``length``.
-
-    >>> float(station_difference(1.0, 99.0, 100.0, True))
-    2.0
-    >>> float(station_difference(1.0, 99.0, 100.0, False))
-    -98.0
-    """
-    diff = np.subtract(s_to, s_from, dtype=float)
-    if closed and length > 0.0:
-        diff = (diff + 0.5 * length) % length - 0.5 * length
-    return diff
-
-
-def _orientation(d: FloatArray, c: FloatArray, r: FloatArray) -> FloatArray:
-    """(m, k) cross(d_i, r_j - p_i) = cross(d_i, r_j) - c_i, given c_i = cross(d_i, p_i)."""
-    return np.multiply.outer(d[:, 0], r[:, 1]) - np.multiply.outer(d[:, 1], r[:, 0]) - c[:, None]
-
-
-def segments_cross(
-    a0: FloatArray, a1: FloatArray, b0: FloatArray, b1: FloatArray
-) -> NDArray[np.bool_]:
-    """Whether segments ``a0 a1`` (m, 2) properly cross segments ``b0 b1`` (k, 2).
+def crosses_boundary(points: FloatArray, boundary: FloatArray) -> bool:
+    """Whether the polyline (p, 2) [m] properly crosses any of the (e, 2, 2) segments [m].
 
     Proper crossing: each segment's end points lie strictly on opposite sides
-    of the other's line (touching and collinear overlap do not count).
-
-    Returns:
-        (m, k) boolean matrix.
-    """
-    da, db = a1 - a0, b1 - b0
-    ca = da[:, 0] * a0[:, 1] - da[:, 1] * a0[:, 0]
-    cb = db[:, 0] * b0[:, 1] - db[:, 1] * b0[:, 0]
-    b_straddles = _orientation(da, ca, b0) * _orientation(da, ca, b1) < 0.0
-    a_straddles = _orientation(db, cb, a0) * _orientation(db, cb, a1) < 0.0
-    return b_straddles & a_straddles.T
-
-
-def polyline_crosses(points: FloatArray, b0: FloatArray, b1: FloatArray) -> bool:
-    """Whether the polyline (p, 2) properly crosses any segment ``b0 b1`` (k, 2).
-
-    ``np.any(segments_cross(points[:-1], points[1:], b0, b1))``, compiled
-    (``kernels.polyline_crosses``): for each segment's line, the side of each
+    of the other's line (touching and collinear overlap do not count). Compiled
+    (``kernels.crosses_boundary``): for each segment's line, the side of each
     polyline point; only a polyline step that straddles the line is tested
-    against the line through the other segment, and the first crossing ends
-    the search.
+    against the line through the segment, and the first crossing ends the search.
     """
-    if len(points) < 2 or len(b0) == 0:
-        return False
     return bool(
-        kernels.polyline_crosses(
-            np.ascontiguousarray(points, dtype=float),
-            np.ascontiguousarray(b0, dtype=float),
-            np.ascontiguousarray(b1, dtype=float),
+        kernels.crosses_boundary(
+            np.ascontiguousarray(points, dtype=float).reshape(-1, 2),
+            np.ascontiguousarray(boundary, dtype=float).reshape(-1, 2, 2),
         )
     )
 

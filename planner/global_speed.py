@@ -23,7 +23,7 @@ import numpy as np
 
 from conesim.planner.config import SpeedProfileConfig
 from conesim.planner.geometry import FloatArray, arc_length
-from conesim.planner.speed_profile import menger_curvature, speed_profile, window_mean
+from conesim.planner.speed_profile import profile_curvature, speed_profile
 from conesim.tracks.global_path import GlobalPath
 
 
@@ -54,7 +54,7 @@ class GlobalSpeedPlan:
             free = dataclasses.replace(config, horizon_stop=False)
             v = speed_profile(laps, free)
             n = len(pts)
-            k = _curvature(laps, config.curvature_window)
+            k = profile_curvature(laps, config)
             self.points: FloatArray = ring
             self.stations: FloatArray = stations
             self.speeds: FloatArray = np.append(v[n : 2 * n], v[n])
@@ -64,7 +64,7 @@ class GlobalSpeedPlan:
             self.stations = arc_length(pts)
             self.length = float(self.stations[-1])
             self.speeds = speed_profile(pts, dataclasses.replace(config, horizon_stop=True))
-            self.curvature = _curvature(pts, config.curvature_window)
+            self.curvature = profile_curvature(pts, config)
 
     def speed_at(self, station: float) -> float:
         """Allowed speed at arc length ``station`` [m] along the global path [m/s]."""
@@ -92,11 +92,3 @@ class GlobalSpeedPlan:
     def _wrap(self, stations: FloatArray) -> FloatArray:
         st = np.asarray(stations, dtype=float)
         return np.mod(st, self.length) if self.closed else st
-
-
-def _curvature(points: FloatArray, window: float) -> FloatArray:
-    """Menger curvature (n,) [1/m] of (n, 2) points, averaged over ``window`` [m]."""
-    kappa = menger_curvature(points)
-    if window > 0.0 and len(points) > 2:
-        kappa = window_mean(kappa, float(arc_length(points)[-1]) / (len(points) - 1), window)
-    return kappa

@@ -11,8 +11,8 @@ The seed's node, step by step (each step named as a function):
    inside their boundary line (``bridges.estimate_track``).
 3. ``virtual_partners``, ``delaunay_edges``, ``find_bridges`` (``bridges``):
    Delaunay on all cones, the checked left-right bridges and their midpoints.
-4. ``ordered_midpoints`` (``ordering``): the used bridges' midpoints from the
-   nearest one in front, chaining nearest neighbours.
+4. ``ordered_midpoints`` (``kernels.ordering``): the used bridges' midpoints
+   from the nearest one in front, chaining nearest neighbours.
 5. ``fit_path`` (``spline``): B-spline through them, resampled every 0.5 m.
 6. ``check_path``: at least two midpoints, at least ``min_path_length`` long,
    starting within ``max_start_distance``, and crossing no boundary edge.
@@ -24,20 +24,15 @@ the current frame through the frame tree (old ``os_sensor`` at the old stamp
 plan reports ``PlanStatus.FALLBACK`` with the reason; with nothing to carry
 forward it is ``PlanStatus.FAILED`` with an empty path.
 
-Written for speed (per detection): the default settings are built once, and
-the steps' loops are compiled (``planner.kernels``: step 2 in one call, the
-bridges, the ordering, the spline's sampling, step 6's crossing test, which
-only examines the path segments that straddle a boundary edge's line, and
-the speed profile), with the numbers of the numpy code they replaced
-(``tests/planner/kernels/``). Step 3's triangulation is scipy's.
+It runs per detection, so the steps are compiled (``planner.kernels``;
+step 3's triangulation and step 5's fit are scipy's), and
 ``reference_path_planning`` runs the compiled steps between two scipy calls
-in one call each (``planner.fused``: steps 2 and 3a in
+in one call each (``planner.kernel_chains``): steps 2 and 3a in
 ``cones_with_partners``, steps 3 and 4 after the triangulation in
-``bridges_and_midpoints``, step 6's arc length and crossing test with step
-7's limits after the spline in ``fused.check_and_limit``), with each
-config's settings gathered once (``MidlineConfig.view_settings`` ...,
-``SpeedProfileConfig.limit_settings``): the same numbers, without a call,
-a wrapper and a dataclass per step (``tests/planner/test_fused.py``).
+``bridges_and_midpoints``, step 6's numbers with step 7's limits after the
+spline in ``kernel_chains.check_and_limit``, each
+given its settings groups (``MidlineConfig.view_settings`` ...,
+``SpeedProfileConfig.limit_settings``, built once per config).
 """
 
 from __future__ import annotations
@@ -51,18 +46,17 @@ from numpy.typing import NDArray
 
 from conesim.core.messages import FRAME_OS_SENSOR, Header
 from conesim.localization.frames import LATEST, Buffer, TransformError
-from conesim.planner import fused, kernels
+from conesim.planner import kernel_chains, kernels
 from conesim.planner.bridges import (
     Bridges,
     ConeSet,
     PairTable,
     TrackEstimate,
     delaunay_simplices,
-    track_estimate,
 )
 from conesim.planner.classify import LEFT, RIGHT, ClassifiedCones
 from conesim.planner.config import MidlineConfig, SpeedProfileConfig
-from conesim.planner.geometry import FloatArray, arc_length
+from conesim.planner.geometry import FloatArray, arc_length, crosses_boundary
 from conesim.planner.messages import BridgeLines, LocalPath, Midpoints, Waypoints
 from conesim.planner.speed_profile import profile_speeds, speed_profile
 from conesim.planner.spline import fit_path
@@ -181,14 +175,7 @@ def cones_to_sensor(
 
 def in_view(cones: ConeSet, config: MidlineConfig) -> NDArray[np.bool_]:
     """Step 2a: (n,) mask of the cones in range and at a boundary's distance from the path."""
-    keep: NDArray[np.bool_] = kernels.in_view(
-        cones.points,
-        cones.offset,
-        config.min_x,
-        config.max_range,
-        config.min_boundary_offset,
-        config.max_boundary_offset,
-    )
+    keep: NDArray[np.bool_] = kernels.in_view(cones.points, cones.offset, config.view_settings)
     return keep
 
 
@@ -214,18 +201,18 @@ def boundary_cones(
         cones.station,
         axis.length,
         axis.closed,
-        *config.view_settings,
+        config.view_settings,
     )
     real = cones if len(keep) == len(cones) else cones.select(keep)
     pairs = PairTable(left, right, dist, same, span, middle)
-    track = track_estimate(width, centre, measured, config)
+    track = TrackEstimate(float(width), float(centre), bool(measured))
     return real, pairs, track, len(cones) - len(real)
 
 
 def cones_with_partners(
     cones: ConeSet, config: MidlineConfig
 ) -> tuple[ConeSet, TrackEstimate, int]:
-    """Steps 2 and 3a in one compiled call (``fused.plan_cones``).
+    """Steps 2 and 3a in one compiled call (``kernel_chains.plan_cones``).
 
     ``boundary_cones``, then ``virtual_partners`` joined after the kept
     cones: the same cones, estimate and count, without the pair table.
@@ -236,7 +223,7 @@ def cones_with_partners(
     """
     axis = cones.axis
     points, side, offset, station, tangent, virtual, width, centre, measured, dropped = (
-        fused.plan_cones(
+        kernel_chains.plan_cones(
             cones.points,
             cones.side,
             cones.offset,
@@ -259,7 +246,7 @@ def bridges_and_midpoints(
     track: TrackEstimate,
     sensor_station: float,
 ) -> tuple[Bridges, FloatArray, FloatArray, float]:
-    """Steps 3 and 4 after the triangulation, in one compiled call (``fused.plan_midpoints``).
+    """Steps 3 and 4 after the triangulation, one compiled call (``kernel_chains.plan_midpoints``).
 
     ``find_bridges`` on the triangulation's edges, ``ordered_midpoints``, and
     the boundary edges as segments.
@@ -277,7 +264,7 @@ def bridges_and_midpoints(
     """
     axis = cones.axis
     left, right, length, valid, used, mid, station, boundary, ordered, ordered_length = (
-        fused.plan_midpoints(
+        kernel_chains.plan_midpoints(
             simplices,
             cones.points,
             cones.side,
@@ -286,12 +273,10 @@ def bridges_and_midpoints(
             cones.virtual,
             axis.length,
             axis.closed,
-            config.bridge_settings,
             track.measured,
             track.width,
-            config.width_tolerance,
-            config.bridge_selection == "shortest",
             sensor_station,
+            config.bridge_settings,
             config.ordering_settings,
         )
     )
@@ -307,6 +292,7 @@ def check_path(
     length: float | None = None,
     *,
     crosses: bool | None = None,
+    start: float | None = None,
 ) -> str:
     """Step 6: why the path is not sound, or "" when it is.
 
@@ -317,7 +303,9 @@ def check_path(
         config: the thresholds.
         length: the path's length [m] if known (``arc_length(path)[-1]``).
         crosses: whether it crosses a boundary edge, if known
-            (``kernels.crosses_boundary(path, boundary)``).
+            (``crosses_boundary(path, boundary)``).
+        start: the first point's distance from the sensor [m], if known
+            (``np.hypot(*path[0])``).
     """
     if n_midpoints < 2:
         return f"{n_midpoints} ordered midpoints (need 2)"
@@ -325,11 +313,12 @@ def check_path(
         length = float(arc_length(path)[-1])
     if length < config.min_path_length:
         return f"path {length:.2f} m long (need {config.min_path_length} m)"
-    start = float(np.hypot(path[0, 0], path[0, 1]))
+    if start is None:
+        start = float(np.hypot(path[0, 0], path[0, 1]))
     if start > config.max_start_distance:
         return f"path starts {start:.2f} m away (max {config.max_start_distance} m)"
     if crosses is None:
-        crosses = bool(kernels.crosses_boundary(path, boundary))  # polyline_crosses, compiled
+        crosses = crosses_boundary(path, boundary)
     if crosses:
         return "path crosses a track boundary"
     return ""
@@ -410,12 +399,14 @@ def reference_path_planning(
         cone_set, delaunay_simplices(cone_set.points), config, track, cones.sensor_station
     )
     path = np.ascontiguousarray(fit_path(midpoints, config, midpoints_length), dtype=float)
-    # The arc length for the check and the speed profile, the crossing test
-    # and the profile's limits: one compiled call.
-    s, crosses, limits = fused.check_and_limit(
+    # The check's numbers, the arc length for the speed profile and the
+    # profile's limits: one compiled call.
+    s, length, start, crosses, limits = kernel_chains.check_and_limit(
         path, boundary, speeds is None, (speed_config or _DEFAULT_SPEED).limit_settings
     )
-    reason = check_path(path, len(midpoints), boundary, config, float(s[-1]), crosses=crosses)
+    reason = check_path(
+        path, len(midpoints), boundary, config, length, crosses=crosses, start=start
+    )
     status = PlanStatus.OK
     if reason:
         carried = carry_path_forward(previous, buffer, stamp, cones.header.frame_id, sensor_frame)

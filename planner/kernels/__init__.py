@@ -1,41 +1,33 @@
-"""Compiled kernels (numba) for the planner's per-detection glue.
+"""Compiled kernels (numba) for the planner's per-detection steps.
 
-Why hand-written compiled code exists here: the planning step (classify +
-plan + speed profile, issue 5: median <= 0.5 ms with 80 cones in view) runs
-on a few dozen cones, where numpy's cost is per call, not per element. With
-the numpy glue already tuned, the step measured 0.96-1.03 ms at 80 cones;
-a perf profile gave the Python interpreter 34 %, numpy's per-call overhead
-23 %, arithmetic 7.6 %, qhull 16 %, malloc 9 %, the k-d tree 3 %. Each
-kernel replaces a chain of small numpy calls (masks, outer products,
-gathers, argmins, a Python walk) with one loop over the elements, compiled
-once (``cache=True``: later processes load the machine code from the cache
-next to each module's file, in this package's ``__pycache__``, or from
-``NUMBA_CACHE_DIR`` or the user's cache directory when the package directory
-is not writable, e.g. a system install; with no writable cache directory at
-all they compile in each process, with a warning per module). Compiling all
-of them from a cold cache takes about 12 s on the 2-core development
-machine (30-45 s on a slower one of the same kind), loading them from the
-cache about 0.25 s.
+Why compiled: the planning step runs per detection on a few dozen cones,
+where numpy's cost is per call, not per element; each kernel is one loop
+over the elements in place of a chain of small numpy calls. They are
+compiled on first use with numba's on-disk cache (``cache=True``, through
+``conesim.core.compiled.cached_njit``: beside each module's file, or under
+``NUMBA_CACHE_DIR`` or the user's cache directory when the package
+directory is not writable; with no writable cache directory at all they
+compile in each process, with a warning per module).
 
 Every kernel does the same IEEE operations per element, in the same order,
-as the numpy code it replaces (no ``fastmath``, so no reassociation or
-fused multiply-add): the results are bit for bit the same, including which
-element wins a tie (first in the order numpy's ``argmin`` or stable
-``argsort`` would see). ``tests/planner/test_speedups.py`` and the tests in
-``tests/planner/kernels/`` keep the numpy formulations as references and
-compare exactly.
+as the numpy code it was written from (no ``fastmath``, so no reassociation
+or fused multiply-add): the results are bit for bit the same, including
+which element wins a tie (first in the order numpy's ``argmin`` or stable
+``argsort`` would see). That numpy code is kept as the reference in
+``tests/planner/`` (``test_speedups.py`` and ``kernels/``), which compares
+exactly. The one exception: the jerk limit's cube root is left to
+``numpy.cbrt`` between ``profile_limits`` and ``profile_passes``, as numpy's
+SIMD (SVML) cube root is not libm's.
 
-The speed profile's kernels (``profile_limits``, ``profile_passes``) replace
-its numpy steps and the Python loops of its friction-ellipse passes: 0.10 ms
-per plan on 60 waypoints, 7.6 us compiled (``speed_profile``'s docstring).
-Their one exception to "same operations": the jerk limit's cube root is left
-to ``numpy.cbrt`` between them, as numpy's SIMD (SVML) cube root is not libm's.
-
-The kernels are called through typed Python wrappers in ``geometry``,
-``bridges``, ``ordering``, ``midline`` and ``speed_profile``; they take plain
-arrays and scalars (no dataclasses) and are untyped for mypy (``numba`` has no
-stubs). Integer index arrays are ``intp``, sides ``int8``, flags ``bool``, all
-C-contiguous, so each kernel compiles to one specialisation.
+The kernels are called through typed Python wrappers (in ``geometry``,
+``classify``, ``bridges``, ``midline``, ``spline`` and ``speed_profile``),
+chained with their neighbours in ``planner.kernel_chains``, or by other
+kernels (``sub_table``, ``median``, ``boundary_offset``, ``polyline_crosses``,
+``start_index``, ``chain_nearest``). Kernels take arrays, scalars and the
+settings groups of ``planner.settings`` (named tuples, read by field), and
+are untyped for mypy (``numba`` has no stubs). Integer index arrays are
+``intp``, sides ``int8``, flags ``bool``, all C-contiguous, so each kernel
+compiles to one specialisation.
 
 One module per concept, each compiled with its own cache (numba caches per
 source file); every kernel is re-exported here, so callers write

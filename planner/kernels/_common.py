@@ -3,7 +3,7 @@
 Private to ``planner.kernels``: each helper is compiled once here and called
 from the kernels of several modules. numba's cache checks a cached kernel
 against its own source file only, so the callers' cached machine code keeps
-the old helper after an edit here: run ``make clean-cache`` (``planner.fused``,
+the old helper after an edit here: run ``make clean-cache`` (``planner.kernel_chains``,
 which chains the step kernels from another file, is in the same position).
 """
 
@@ -25,7 +25,10 @@ _compiled = cached_njit(_probe, "conesim.planner.kernels._common")
 
 @_compiled
 def wrapped_difference(diff, length, closed):
-    """``station_difference``'s wrap of one difference: ``(x % length) - length / 2``.
+    """A station difference ``diff`` [m] wrapped into [-length/2, length/2) when ``closed``.
+
+    ``(x % length) - length / 2``, numpy's formulation (the reference in
+    ``tests/planner/kernels/geometry_reference.py``), for one difference.
 
     With ``x = diff + length / 2``, Python's (and numpy's) float ``x % length``
     is ``fmod`` moved onto the divisor's sign; ``fmod`` is exact, and for x in

@@ -86,24 +86,19 @@ def delaunay_edges(simplices, n):
 
 @_compiled
 def find_bridges(  # noqa: PLR0917
-    edges,
-    points,
-    side,
-    offset,
-    station,
-    virtual,
-    length,
-    closed,
-    min_width,
-    max_width,
-    max_bridge,
-    max_gap,
-    check_width,
-    width,
-    width_tolerance,
-    shortest,
+    edges, points, side, offset, station, virtual, length, closed, check_width, width, checks
 ):
-    """``bridges.find_bridges``: left, right, length, valid, used, midpoints, station."""
+    """``bridges.find_bridges``: left, right, length, valid, used, midpoints, station.
+
+    ``checks`` is a ``settings.BridgeSettings``; the span is checked against
+    ``width`` only when ``check_width``.
+    """
+    min_width = checks.min_track_width
+    max_width = checks.max_track_width
+    max_bridge = checks.max_bridge_length
+    max_gap = checks.max_station_gap
+    width_tolerance = checks.width_tolerance
+    shortest = checks.shortest
     e = edges.shape[0]
     m = 0
     for q in range(e):
@@ -157,10 +152,13 @@ def find_bridges(  # noqa: PLR0917
 
 
 @_compiled
-def boundary_edges(  # noqa: PLR0917
-    edges, side, offset, station, length, closed, min_width, max_gap
-):
-    """``bridges.boundary_edges``: rows of the same-side edges along one boundary."""
+def boundary_edges(edges, side, offset, station, length, closed, checks):  # noqa: PLR0917
+    """``bridges.boundary_edges``: rows of the same-side edges along one boundary.
+
+    ``checks`` is a ``settings.BridgeSettings`` (its minimum span and station gap).
+    """
+    min_width = checks.min_track_width
+    max_gap = checks.max_station_gap
     e = edges.shape[0]
     along = np.zeros(e, np.bool_)
     for q in range(e):

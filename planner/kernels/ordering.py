@@ -1,7 +1,26 @@
-"""Step 4: the bridges' midpoints in driving order (``ordering``).
+"""Step 4: the bridges' midpoints in driving order, from the nearest one in front.
 
-The first midpoint (the nearest in front of the sensor), the
-nearest-neighbour chain from it, and both for the used bridges in one call.
+The seed sorts the midpoints "starting from the nearest in front of the
+vehicle, chaining through nearest neighbours". Two guards keep the chain on
+one stretch of track, using each midpoint's station along the global path
+(the mean of its cones' stations; ``settings.OrderingSettings`` names the
+limits):
+
+- the start (``start_index``) is the nearest midpoint with x >
+  ``start_min_x`` whose station is within [-start_station_back,
+  +start_station_ahead] of the sensor's; a hairpin's far side, in front of
+  the car but a stretch later, is not a start;
+- each step (``chain_nearest``) goes to the nearest unvisited midpoint within
+  ``max_step`` whose station advances by at most ``max_station_step``,
+  regresses by at most ``station_back_tolerance``, and advances by at least
+  ``min_step_advance`` times the step's length: the chain never jumps across
+  an infield (a large station jump), sideways to a stray midpoint, nor turns
+  back. A midpoint closer than ``min_midpoint_spacing`` to the chain's last
+  one is merged into it (skipped).
+
+The chain stops when no midpoint qualifies. ``ordered_midpoints`` runs both
+on the used bridges. Of equally near midpoints the lowest index wins, the one
+a stable ``argsort`` of the step lengths ranks first.
 """
 
 from __future__ import annotations
@@ -24,10 +43,20 @@ _compiled = cached_njit(_probe, "conesim.planner.kernels.ordering")
 
 
 @_compiled
-def start_index(  # noqa: PLR0917
-    midpoints, station, sensor_station, length, closed, start_min_x, start_back, start_ahead
-):
-    """``ordering.start_index``: the nearest midpoint in front (first of equals), or -1."""
+def start_index(midpoints, station, sensor_station, length, closed, ordering):  # noqa: PLR0917
+    """The index of the nearest midpoint in front of the sensor (first of equals), or -1.
+
+    Args:
+        midpoints: (k, 2) midpoints in ``os_sensor`` [m].
+        station: (k,) their stations [m].
+        sensor_station: the sensor's station [m].
+        length: the station axis' length [m].
+        closed: whether stations wrap.
+        ordering: a ``settings.OrderingSettings`` (the start's fields).
+    """
+    start_min_x = ordering.start_min_x
+    start_back = ordering.start_station_back
+    start_ahead = ordering.start_station_ahead
     first = -1
     best = math.inf
     for i in range(len(station)):
@@ -42,25 +71,19 @@ def start_index(  # noqa: PLR0917
 
 
 @_compiled
-def chain_nearest(  # noqa: PLR0917
-    midpoints,
-    station,
-    first,
-    length,
-    closed,
-    max_step,
-    max_station_step,
-    back_tolerance,
-    min_advance,
-    min_spacing,
-):
-    """``ordering.chain_nearest``: the nearest-neighbour chain from ``first``.
+def chain_nearest(midpoints, station, first, length, closed, ordering):  # noqa: PLR0917
+    """(m,) indices of the nearest-neighbour chain from index ``first``, m >= 1.
 
     Each step goes to the nearest unvisited allowed midpoint, the first index
     of equals: the first unvisited one in a stable ``argsort`` of the row.
     The station advance is tested first: a midpoint it rules out needs no
     distance (the same choice, fewer ``np.hypot``).
     """
+    max_step = ordering.max_step
+    max_station_step = ordering.max_station_step
+    back_tolerance = ordering.station_back_tolerance
+    min_advance = ordering.min_step_advance
+    min_spacing = ordering.min_midpoint_spacing
     m = len(station)
     visited = np.zeros(m, np.bool_)
     visited[first] = True
@@ -100,33 +123,17 @@ def chain_nearest(  # noqa: PLR0917
 
 
 @_compiled
-def ordered_midpoints(  # noqa: PLR0917
-    used,
-    midpoints,
-    station,
-    sensor_station,
-    length,
-    closed,
-    start_min_x,
-    start_back,
-    start_ahead,
-    max_step,
-    max_station_step,
-    back_tolerance,
-    min_advance,
-    min_spacing,
-):
-    """``ordering.ordered_midpoints``: the used bridges' midpoints in driving order."""
+def ordered_midpoints(used, midpoints, station, sensor_station, length, closed, ordering):  # noqa: PLR0917
+    """The used bridges' midpoints (m, 2) [m] in driving order; (0, 2) with none in front.
+
+    ``used`` (k,) selects among ``midpoints`` (k, 2) and ``station`` (k,);
+    then ``start_index`` and ``chain_nearest``.
+    """
     rows = true_rows(used)
     mid = midpoints[rows]
     st = station[rows]
-    first = start_index(
-        mid, st, sensor_station, length, closed, start_min_x, start_back, start_ahead
-    )
+    first = start_index(mid, st, sensor_station, length, closed, ordering)
     if first < 0:
         return np.zeros((0, 2))
-    order = chain_nearest(
-        mid, st, first, length, closed, max_step, max_station_step, back_tolerance, min_advance,
-        min_spacing,
-    )  # fmt: skip
+    order = chain_nearest(mid, st, first, length, closed, ordering)
     return mid[order]

@@ -24,9 +24,14 @@ _compiled = cached_njit(_probe, "conesim.planner.kernels.partners")
 
 @_compiled
 def partners_needed(  # noqa: PLR0917
-    side, offset, left, right, same, dist, radius, centre, width, tolerance
+    side, offset, left, right, same, dist, centre, width, partners
 ):
-    """``virtual_partners``' selection: rows of the cones that get a virtual partner."""
+    """``virtual_partners``' selection: rows of the cones that get a virtual partner.
+
+    ``partners`` is a ``settings.PartnerSettings`` (its radius and tolerance).
+    """
+    radius = partners.partner_radius
+    tolerance = partners.partner_offset_tolerance
     n = len(side)
     near = np.zeros(n, np.bool_)
     a, b = dist.shape

@@ -22,7 +22,7 @@ _compiled = cached_njit(_probe, "conesim.planner.kernels.polyline")
 
 @_compiled
 def polyline_crosses(points, b0, b1):
-    """``geometry.polyline_crosses``: the polyline properly crosses a segment ``b0 b1``."""
+    """Whether the polyline (p, 2) properly crosses a segment ``b0 b1`` (k, 2), p >= 1 [m]."""
     p = len(points)
     k = len(b0)
     for c in range(k):
@@ -60,7 +60,7 @@ def arc_length(points):
 
 @_compiled
 def crosses_boundary(points, boundary):
-    """``polyline_crosses(points, boundary[:, 0], boundary[:, 1])`` for (e, 2, 2) edges."""
+    """``geometry.crosses_boundary``: ``polyline_crosses`` against (e, 2, 2) edges [m]."""
     if len(points) < 2 or len(boundary) == 0:
         return False
     return polyline_crosses(points, boundary[:, 0], boundary[:, 1])

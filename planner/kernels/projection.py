@@ -198,9 +198,9 @@ def window_overlaps(lo, hi, table, length, closed, half_max):  # noqa: PLR0917
 
     Where the segments tile the window (on a closed path, or well inside an
     open one, and wider than ``half_max``, half the longest segment) without
-    looking; otherwise ``window_mask(lo, hi).any()``: a segment whose
-    mid-station lies within the window's half width plus its half length
-    of the window's middle (``station_difference``'s wrap).
+    looking; otherwise whether a segment's mid-station lies within the
+    window's half width plus its half length of the window's middle (the
+    station wrap of ``_common.wrapped_difference``).
     """
     inside = closed or (lo < length - half_max and hi > half_max)
     if inside and hi - lo > half_max:

@@ -43,33 +43,31 @@ def _half_window(window, spacing, n, rounded):
 
 
 @_compiled
-def profile_limits(  # noqa: PLR0917
-    points,
-    s,
-    has_s,
-    window,
-    a_lat,
-    a_lat_aero,
-    floor,
-    v_max,
-    jerk_max,
-    jerk_window,
-):
-    """``speed_profile`` up to the jerk limit's cube root, for n >= 1 points.
+def profile_limits(points, s, has_s, limits):
+    """``speed_profile`` up to the jerk limit's cube root, for (n, 2) points [m].
 
-    The arc length (unless ``has_s``; ``numpy.cumsum`` of the ``np.hypot``
-    steps), ``_menger``, ``window_mean`` when ``window > 0`` and n > 2,
-    ``curvature_limit`` (``floor = a_lat / v_max**2``) and ``jerk_limit``'s
-    ratio ``jerk_max / slope`` (inf where the slope is 0), each with the
-    numpy version's operations in its order.
+    The arc length (unless ``has_s``: then ``s`` (n,) [m]; ``numpy.cumsum``
+    of the ``np.hypot`` steps), the Menger curvature, its window mean when
+    ``limits.curvature_window > 0`` and n > 2, the curvature limit and the
+    jerk limit's ratio ``lateral_jerk_max / slope`` (inf where the slope is
+    0), each with the reference's operations in its order
+    (``tests/planner/kernels/speed_profile_reference.py``). ``limits`` is a
+    ``settings.LimitSettings``.
 
     Returns:
         s (n,) [m], the curvature kappa (n,) [1/m] the passes read, the
         curvature limit v (n,) [m/s], and the ratio (n,) [m^3/s^3] (empty
-        when ``jerk_limit`` gives None). Its cube root is left to
+        without a jerk limit). Its cube root is left to
         ``numpy.cbrt``: on CPUs with AVX-512 numpy takes it from SVML, whose
         last bit differs from libm's (and numba's) in about half the cases.
     """
+    window = limits.curvature_window
+    a_lat = limits.a_lat_max
+    a_lat_aero = limits.a_lat_aero
+    floor = limits.curvature_floor
+    v_max = limits.v_max
+    jerk_max = limits.lateral_jerk_max
+    jerk_window = limits.jerk_window
     n = len(points)
     step_length = np.empty(max(n - 1, 0))
     for i in range(n - 1):
@@ -136,39 +134,36 @@ def profile_limits(  # noqa: PLR0917
 
 @_compiled
 def _ellipse_scale(v, kappa, a_lat_max, a_lat_aero):
-    """``speed_profile._ellipse_scale``: sqrt(1 - (v^2 |kappa| / a_lat(v))^2), 0 beyond."""
+    """The friction ellipse's share left: sqrt(1 - (v^2 |kappa| / a_lat(v))^2), 0 beyond."""
     v2 = v * v
     lat = v2 * abs(kappa) / (a_lat_max + a_lat_aero * v2)
     return math.sqrt(1.0 - lat * lat) if lat < 1.0 else 0.0
 
 
 @_compiled
-def profile_passes(  # noqa: PLR0917
-    s,
-    kappa,
-    v,
-    jerk,
-    has_start,
-    v_start,
-    ellipse,
-    a_drive,
-    a_brake,
-    a_lat,
-    a_lat_aero,
-    horizon_stop,
-    has_end,
-    v_end,
-):
-    """The rest of ``speed_profile``: speeds (n,) [m/s] for n >= 1 waypoints.
+def profile_passes(s, kappa, v, jerk, has_start, v_start, has_end, v_end, passes):  # noqa: PLR0917
+    """The rest of ``speed_profile``: speeds (n,) [m/s] at n waypoints.
 
-    ``numpy.minimum`` of the curvature limit ``v`` (changed in place) and
-    ``jerk`` (skipped when empty), the start speed, the forward pass
-    (``ellipse_forward_pass`` or ``forward_pass``), the horizon stop and the
-    backward pass, each with the numpy or Python version's operations: the
-    closed-form passes' running minima in the same direction; Python's
-    ``min`` and ``max`` (the first argument unless the second is strictly
-    less or greater) for the start and end speeds and in the ellipse passes.
+    The minimum of the curvature limit ``v`` (n,) [m/s] (changed in place)
+    and the jerk limit ``jerk`` (n,) [m/s] (skipped when empty), the start
+    speed, the drive pass (with the friction ellipse, reading ``kappa`` (n,)
+    [1/m], or in closed form), the horizon stop and the brake pass, along
+    arc lengths ``s`` (n,) [m]. ``passes`` is a ``settings.PassSettings``;
+    with ``passes.brake`` False the speeds after the horizon stop are
+    returned (``v`` itself). n >= 1 with the horizon stop.
+
+    Each with the reference's operations in its order: the closed-form
+    passes' running minima in the same direction (``numpy.minimum.accumulate``,
+    NaN kept); Python's ``min`` and ``max`` (the first argument unless the
+    second is strictly less or greater) for the start and end speeds and in
+    the ellipse passes.
     """
+    ellipse = passes.friction_ellipse
+    a_drive = passes.a_drive
+    a_brake = passes.a_brake
+    a_lat = passes.a_lat_max
+    a_lat_aero = passes.a_lat_aero
+    horizon_stop = passes.horizon_stop
     n = len(v)
     if len(jerk):
         for i in range(n):
@@ -203,6 +198,8 @@ def profile_passes(  # noqa: PLR0917
                 v[n - 1] = end
         else:
             v[n - 1] = 0.0
+    if not passes.brake:
+        return v
     out = np.empty(n)
     if ellipse:
         out[n - 1] = v[n - 1]

@@ -3,7 +3,7 @@
 The cones in view (``midline.in_view``); the table of every left-right pair
 (``bridges.pair_table``) and its sub-table for a subset of the cones; the
 track's width and centre from each cone's nearest partner across
-(``bridges.estimate_track``, with its ``median``); each cone's offset from
+(``bridges.estimate_track``, with ``median``, ``numpy.median``'s number); each cone's offset from
 its boundary line; and all of step 2 in one call (``boundary_cones``).
 """
 
@@ -27,10 +27,15 @@ _compiled = cached_njit(_probe, "conesim.planner.kernels.track")
 
 
 @_compiled
-def in_view(  # noqa: PLR0917
-    points, offset, min_x, max_range, min_offset, max_offset
-):
-    """``midline.in_view``: (n,) mask of cones in range and at a boundary's offset."""
+def in_view(points, offset, view):
+    """``midline.in_view``: (n,) mask of cones in range and at a boundary's offset.
+
+    ``view`` is a ``settings.ViewSettings``.
+    """
+    min_x = view.min_x
+    max_range = view.max_range
+    min_offset = view.min_boundary_offset
+    max_offset = view.max_boundary_offset
     n = len(offset)
     keep = np.empty(n, np.bool_)
     for i in range(n):
@@ -144,7 +149,7 @@ def sub_table(keep, n, left, right, dist, same, span, middle):  # noqa: PLR0917
 
 @_compiled
 def median(values):
-    """``bridges.median``: middle value or ``(a + b) / 2`` of the sorted values; NaN if any."""
+    """``numpy.median`` of (n,) values, n >= 1: the middle one or ``(a + b) / 2``; NaN if any."""
     ordered = np.sort(values)
     n = len(ordered)
     half = n // 2
@@ -156,10 +161,16 @@ def median(values):
 
 
 @_compiled
-def estimate_track(  # noqa: PLR0917
-    dist, same, span, middle, min_width, max_width, max_length, min_samples
-):
-    """``bridges.estimate_track``: (width, centre, measured); measured False gives (0, 0)."""
+def estimate_track(dist, same, span, middle, view):
+    """``bridges.estimate_track``: (width, centre, measured) [m, m, -].
+
+    Not measured: the nominal width and centre 0. ``view`` is a
+    ``settings.ViewSettings`` (its span, length, sample count and nominal width).
+    """
+    min_width = view.min_track_width
+    max_width = view.max_track_width
+    max_length = view.max_bridge_length
+    min_samples = view.min_width_samples
     a, b = dist.shape
     # One pass: each row's nearest valid partner and each column's (first of
     # equals: rows and columns are visited in increasing order).
@@ -192,7 +203,7 @@ def estimate_track(  # noqa: PLR0917
             picks_c[m] = c
             m += 1
     if rows == 0 or m < min_samples:
-        return 0.0, 0.0, False
+        return view.nominal_track_width, 0.0, False
     widths = np.empty(m)
     centres = np.empty(m)
     for q in range(m):
@@ -203,7 +214,12 @@ def estimate_track(  # noqa: PLR0917
 
 @_compiled
 def boundary_offset(side, offset, centre, width):
-    """``TrackEstimate.boundary_offset``: ``side * (offset - centre) - width / 2``."""
+    """(n,) how far each cone lies outside its boundary line, as seen from its side [m].
+
+    ``side * (offset - centre) - width / 2`` for the track's centre offset and
+    width [m]: 0 on the boundary, < 0 inside the track, > 0 outside; a cone
+    labelled against its position is far inside.
+    """
     n = len(side)
     out = np.empty(n)
     half = 0.5 * width
@@ -213,43 +229,27 @@ def boundary_offset(side, offset, centre, width):
 
 
 @_compiled
-def boundary_cones(  # noqa: PLR0917
-    points,
-    side,
-    offset,
-    station,
-    length,
-    closed,
-    min_x,
-    max_range,
-    min_offset,
-    max_offset,
-    max_gap,
-    min_width,
-    max_width,
-    max_bridge,
-    min_samples,
-    tolerance,
-):
+def boundary_cones(points, side, offset, station, length, closed, view):  # noqa: PLR0917
     """``midline.boundary_cones``: kept rows, the pair table, (width, centre, measured).
 
     The cones in view; their pair table and the track estimate; when
-    measured, the cones more than ``tolerance`` inside their boundary line
-    dropped and the pair table rebuilt. The width and centre are 0 when not
-    measured (the caller puts in the nominal track).
+    measured, the cones more than ``view.boundary_tolerance`` inside their
+    boundary line dropped and the pair table rebuilt. The width and centre
+    are the nominal width and 0 when not measured. ``view`` is a
+    ``settings.ViewSettings``.
     """
-    keep = true_rows(in_view(points, offset, min_x, max_range, min_offset, max_offset))
+    keep = true_rows(in_view(points, offset, view))
     pts = points[keep]
     sd = side[keep]
     off = offset[keep]
     st = station[keep]
-    left, right, dist, same, span, middle = pair_table(pts, sd, off, st, length, closed, max_gap)
-    width, centre, measured = estimate_track(
-        dist, same, span, middle, min_width, max_width, max_bridge, min_samples
+    left, right, dist, same, span, middle = pair_table(
+        pts, sd, off, st, length, closed, view.max_station_gap
     )
+    width, centre, measured = estimate_track(dist, same, span, middle, view)
     if measured:
         outside = boundary_offset(sd, off, centre, width)
-        on = outside >= -tolerance
+        on = outside >= -view.boundary_tolerance
         if not on.all():
             inner = true_rows(on)
             keep = keep[inner]

@@ -7,13 +7,9 @@ import math
 import numpy as np
 from numpy.testing import assert_allclose
 
-from conesim.planner.geometry import (
-    PathProjector,
-    StationAxis,
-    resample_polyline,
-    segments_cross,
-)
+from conesim.planner.geometry import PathProjector, crosses_boundary, resample_polyline
 from conesim.tracks.global_path import global_path_from_centreline
+from tests.planner.kernels.geometry_reference import axis_difference, window_mask
 
 
 def brute_force(points: np.ndarray, xy: np.ndarray, closed: bool, allowed=None) -> np.ndarray:
@@ -41,7 +37,7 @@ def test_seed_projection_on_one_segment() -> None:
 
 
 def test_projection_is_the_exact_nearest_segment() -> None:
-    """The k-d tree search finds the same nearest distance as testing every segment."""
+    """The bounded search finds the same nearest distance as testing every segment."""
     rng = np.random.default_rng(0)
     s = np.linspace(0.0, 2 * math.pi, 400, endpoint=False)
     xy = np.column_stack([30 * np.cos(s) + 3 * np.cos(7 * s), 20 * np.sin(s)])
@@ -62,27 +58,31 @@ def test_windowed_projection_is_the_nearest_segment_in_the_window() -> None:
     projector = PathProjector(path)
     points = rng.uniform(-35.0, 35.0, (200, 2))
     lo, hi = projector.length - 20.0, projector.length + 30.0  # wraps past the start
-    allowed = projector.window_mask(lo, hi)
+    allowed = window_mask(projector, lo, hi)
     proj = projector.project(points, (lo, hi))
     assert_allclose(proj.distance, brute_force(points, path.xy, True, allowed), atol=1e-9)
-    ahead = projector.axis.difference(proj.station, 0.5 * (lo + hi))
+    ahead = axis_difference(projector.axis, proj.station, 0.5 * (lo + hi))
     longest = float(np.max(np.hypot(*path.segments[1].T)))  # a segment overlapping an edge
     assert np.all(np.abs(ahead) <= 25.0 + longest)
 
 
-def test_station_difference_wraps_on_a_closed_path() -> None:
-    """Differences wrap into [-L/2, L/2) on a loop and not on an open path."""
-    assert_allclose(StationAxis(100.0, True).difference(np.array([1.0, 60.0]), 99.0), [2.0, -39.0])
-    assert_allclose(StationAxis(100.0, False).difference(1.0, 99.0), -98.0)
-
-
-def test_segments_cross() -> None:
-    """A proper X crosses; touching, collinear and disjoint segments do not."""
-    a0 = np.array([[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]])
-    a1 = np.array([[2.0, 2.0], [2.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
-    b0 = np.array([[0.0, 2.0]])
-    b1 = np.array([[2.0, 0.0]])
-    assert segments_cross(a0, a1, b0, b1)[:, 0].tolist() == [True, False, False, False]
+def test_crossing_the_boundary() -> None:
+    """Against the segment (0, 2) -> (2, 0): a proper X crosses; touching it at an
+    end, running along it and stopping short do not; a polyline crosses when one
+    of its steps does; one point, or no segments, never."""
+    boundary = np.array([[[0.0, 2.0], [2.0, 0.0]]])
+    cases = {
+        ((0.0, 0.0), (2.0, 2.0)): True,  # an X through (1, 1)
+        ((0.0, 0.0), (2.0, 0.0)): False,  # ends on the segment's end
+        ((0.0, 0.0), (1.0, 0.0)): False,  # stops short
+        ((0.0, 0.0), (1.0, 1.0)): False,  # ends on the segment
+        ((0.5, 1.5), (1.5, 0.5)): False,  # along it (collinear)
+        ((0.0, 0.0), (0.5, 0.0), (0.5, 3.0)): True,  # the second step crosses
+    }
+    for path, expected in cases.items():
+        assert crosses_boundary(np.array(path), boundary) is expected, path
+    assert not crosses_boundary(np.array([[1.0, 1.0]]), boundary)
+    assert not crosses_boundary(np.array([[0.0, 0.0], [2.0, 2.0]]), np.zeros((0, 2, 2)))
 
 
 def test_resample_polyline_every_half_metre() -> None:

@@ -1,4 +1,10 @@
-"""Speed profile: v = sqrt(a_lat R) on circles, v^2 = 2 a s ramps, the vectorised passes."""
+"""Speed profile: v = sqrt(a_lat R) on circles, v^2 = 2 a s ramps, the drive pass, curvature.
+
+The worked numbers of the steps the package has no entry point for (the
+brake and friction-ellipse passes alone, the jerk limit alone) are checked
+on their numpy reference, which the kernels match bit for bit
+(``tests/planner/kernels/test_speed_profile.py``).
+"""
 
 from __future__ import annotations
 
@@ -7,18 +13,10 @@ import math
 
 import numpy as np
 import pytest
-from numpy.testing import assert_allclose
+from numpy.testing import assert_allclose, assert_array_equal
 
 from conesim.planner import SpeedProfileConfig, speed_profile
-from conesim.planner.speed_profile import (
-    backward_pass,
-    curvature_limit,
-    ellipse_backward_pass,
-    ellipse_forward_pass,
-    forward_pass,
-    jerk_limit,
-    menger_curvature,
-)
+from conesim.planner.speed_profile import forward_pass, profile_curvature
 
 # The worked numbers use 6 m/s^2 lateral and braking and no friction ellipse
 # (tested on its own below).
@@ -30,6 +28,7 @@ LIMITS = {
     "lateral_jerk_max": math.inf,
 }
 FREE = SpeedProfileConfig(v_max=100.0, horizon_stop=False, curvature_window=0.0, **LIMITS)
+POINTWISE = SpeedProfileConfig(curvature_window=0.0)  # the curvature point by point
 
 
 def arc(radius: float, length: float, step: float = 0.5, left: bool = True) -> np.ndarray:
@@ -48,9 +47,12 @@ def test_circle_speed_is_sqrt_a_lat_r(radius: float) -> None:
 
 def test_menger_curvature_is_one_over_r_with_sign() -> None:
     """Any three points on a circle give 1/R exactly; + for left turns."""
-    assert_allclose(menger_curvature(arc(8.0, 20.0)), 1.0 / 8.0, rtol=1e-9)
-    assert_allclose(menger_curvature(arc(8.0, 20.0, left=False)), -1.0 / 8.0, rtol=1e-9)
-    assert_allclose(menger_curvature(np.column_stack([np.arange(10.0), np.zeros(10)])), 0.0)
+    assert_allclose(profile_curvature(arc(8.0, 20.0), POINTWISE), 1.0 / 8.0, rtol=1e-9)
+    right = profile_curvature(arc(8.0, 20.0, left=False), POINTWISE)
+    assert_allclose(right, -1.0 / 8.0, rtol=1e-9)
+    line = np.column_stack([np.arange(10.0), np.zeros(10)])
+    assert_allclose(profile_curvature(line, POINTWISE), 0.0)
+    assert profile_curvature(np.zeros((2, 2))).tolist() == [0.0, 0.0]  # too few for a circle
 
 
 def test_straight_from_standstill_and_the_cap() -> None:
@@ -84,25 +86,29 @@ def test_braking_into_a_corner() -> None:
     straight = np.column_stack([np.arange(-50.0, 0.0, 0.5), np.zeros(100)])
     points = np.vstack([straight, arc(10.0, 20.0)])
     v = speed_profile(points, FREE)
-    assert menger_curvature(points)[100] == pytest.approx(1.0 / 20.0, rel=1e-3)
+    assert profile_curvature(points, FREE)[100] == pytest.approx(1.0 / 20.0, rel=1e-3)
     distance = 10.0 + 2 * 10.0 * math.sin(0.025)  # to x = 0, then the 0.5 m arc's chord
     assert v[80] == pytest.approx(math.sqrt(60.0 + 2 * 6.0 * distance), rel=1e-12)  # x = -10 m
     assert_allclose(v[101:], math.sqrt(60.0), rtol=1e-9)
 
 
-def test_vectorised_passes_equal_the_sequential_loops() -> None:
-    """The cumulative-minimum passes equal the textbook loops on random limits."""
+def test_drive_pass_is_the_sequential_loop() -> None:
+    """The closed-form drive pass equals the textbook loop on random limits; from rest
+    on a straight at 3 m/s^2, 6 m/s after 6 m; the limits are not changed."""
     rng = np.random.default_rng(0)
     s = np.cumsum(rng.uniform(0.1, 1.0, 200))
     limit = rng.uniform(1.0, 20.0, 200)
     fwd = limit.copy()
     for i in range(1, 200):
         fwd[i] = min(fwd[i], math.sqrt(fwd[i - 1] ** 2 + 2 * 3.0 * (s[i] - s[i - 1])))
-    bwd = fwd.copy()
-    for i in range(198, -1, -1):
-        bwd[i] = min(bwd[i], math.sqrt(bwd[i + 1] ** 2 + 2 * 6.0 * (s[i + 1] - s[i])))
+    given = limit.copy()
     assert_allclose(forward_pass(s, limit, 3.0), fwd, rtol=1e-9)
-    assert_allclose(backward_pass(s, forward_pass(s, limit, 3.0), 6.0), bwd, rtol=1e-9)
+    assert_array_equal(limit, given)
+    ramp = forward_pass(np.array([0.0, 1.5, 6.0]), np.array([0.0, 50.0, 50.0]), 3.0)
+    assert_allclose(ramp, [0.0, 3.0, 6.0], rtol=1e-12)
+    assert forward_pass(np.zeros(0), np.zeros(0), 3.0).shape == (0,)
+    with pytest.raises(ValueError, match="alike"):
+        forward_pass(np.zeros(3), np.zeros(4), 3.0)
 
 
 def test_empty_and_single_point() -> None:
@@ -125,51 +131,9 @@ def test_curvature_window_averages_wiggles_but_keeps_a_circle() -> None:
     free = {**LIMITS, "a_drive": 1000.0, "a_brake": 1000.0, "horizon_stop": False}
     point_by_point = speed_profile(zigzag, SpeedProfileConfig(curvature_window=0.0, **free))
     windowed = speed_profile(zigzag, SpeedProfileConfig(curvature_window=3.2, **free))
-    k = abs(menger_curvature(zigzag)[10])
+    k = abs(profile_curvature(zigzag, POINTWISE)[10])
     assert_allclose(point_by_point[2:-2], math.sqrt(6.0 / k), rtol=1e-9)
     assert_allclose(windowed[8:-8], math.sqrt(6.0 * 7 / k), rtol=1e-9)
-
-
-def test_friction_ellipse_on_a_circle_from_rest() -> None:
-    """On R = 10 m (V^2 = a_lat R = 60), dv^2/ds = 2 a_d sqrt(1 - (v^2 / V^2)^2) from rest.
-
-    So arcsin(v^2 / V^2) = 2 a_d s / V^2: at s = 5 m, v^2 = 60 sin(0.5) = 28.77,
-    v = 5.363 m/s (a straight line gives sqrt(30) = 5.477); V is reached at
-    s = pi V^2 / (4 a_d) = 15.71 m. Fine steps: Euler error < 0.5 %.
-    """
-    s = np.arange(0.0, 30.0, 0.01)
-    kappa = np.full_like(s, 0.1)
-    limit = np.full_like(s, math.sqrt(60.0))
-    limit[0] = 0.0
-    v = ellipse_forward_pass(s, limit, kappa, 3.0, a_lat_max=6.0)
-    assert v[500] == pytest.approx(math.sqrt(60.0 * math.sin(0.5)), rel=5e-3)
-    assert v[1500] < math.sqrt(60.0) < v[1600] + 1e-9
-
-
-def test_friction_ellipse_brakes_less_in_the_corner() -> None:
-    """Braking to 5 m/s at the end of R = 10 m: the ellipse leaves less than a_brake.
-
-    Backwards from v^2 = 25 at the end: dv^2/ds = 2 a_b sqrt(1 - (v^2 / 60)^2),
-    so arcsin(v^2 / 60) grows by 2 a_b ds / 60 = 0.2 rad per metre with a_b = 6:
-    1 m back v^2 = 60 sin(arcsin(25 / 60) + 0.2) = 35.87 (without: 37).
-    On a straight (kappa = 0) the loops equal the closed-form passes.
-    """
-    s = np.arange(0.0, 10.001, 0.001)
-    limit = np.full_like(s, math.sqrt(60.0))
-    limit[-1] = 5.0
-    v = ellipse_backward_pass(s, limit, np.full_like(s, 0.1), 6.0, a_lat_max=6.0)
-    expected = 60.0 * math.sin(math.asin(25.0 / 60.0) + 0.2)
-    assert v[-1001] ** 2 == pytest.approx(expected, rel=1e-3)
-    rng = np.random.default_rng(0)
-    s = np.cumsum(rng.uniform(0.1, 1.0, 100))
-    lim = rng.uniform(1.0, 20.0, 100)
-    zero = np.zeros(100)
-    assert_allclose(
-        ellipse_forward_pass(s, lim, zero, 3.0, a_lat_max=6.0), forward_pass(s, lim, 3.0)
-    )
-    assert_allclose(
-        ellipse_backward_pass(s, lim, zero, 6.0, a_lat_max=6.0), backward_pass(s, lim, 6.0)
-    )
 
 
 def test_speed_profile_uses_the_ellipse_when_asked() -> None:
@@ -184,29 +148,15 @@ def test_speed_profile_uses_the_ellipse_when_asked() -> None:
 
 def test_downforce_raises_the_corner_speed() -> None:
     """v^2 |kappa| = a_lat_max + a_lat_aero v^2: R = 20 m, 6 m/s^2, 0.01 1/m gives
-    v = sqrt(6 / (0.05 - 0.01)) = 12.247 m/s (a_lat 7.5 = 6 + 0.01 * 150); where
-    |kappa| <= a_lat_aero + a_lat_max / v_max^2 = 0.0167 1/m (R >= 60 m), v_max."""
-    cfg = SpeedProfileConfig(a_lat_max=6.0, a_lat_aero=0.01, v_max=30.0)
-    v = curvature_limit(np.array([0.05, -0.05, 0.01, 0.0]), cfg)
-    assert_allclose(v[:2], math.sqrt(150.0), rtol=1e-12)
-    assert_allclose(v[2:], 30.0)
-    assert v[0] ** 2 * 0.05 == pytest.approx(6.0 + 0.01 * v[0] ** 2)
-
-
-def test_jerk_limit_on_a_curvature_ramp() -> None:
-    """Curvature rising 0.01 1/m per metre: v <= (60 / 0.01)^(1/3) = 18.17 m/s.
-
-    Samples 0.5 m apart, the slope over a 4 m window (8 steps); flat curvature:
-    no limit. With J = inf there is none at all.
-    """
-    kappa = np.concatenate([np.zeros(20), 0.005 * np.arange(1, 21), np.full(20, 0.1)])
-    cfg = SpeedProfileConfig(lateral_jerk_max=60.0, jerk_window=4.0)
-    v = jerk_limit(kappa, 0.5, cfg)
-    assert v is not None
-    assert_allclose(v[28:32], (60.0 / 0.01) ** (1 / 3), rtol=1e-9)
-    assert v[28] == pytest.approx(18.17, abs=0.01)
-    assert np.all(np.isinf(v[:15])) and np.all(np.isinf(v[-15:]))
-    assert jerk_limit(kappa, 0.5, SpeedProfileConfig(lateral_jerk_max=math.inf)) is None
+    v = sqrt(6 / (0.05 - 0.01)) = 12.247 m/s (a_lat 7.5 = 6 + 0.01 * 150), turning
+    either way; where |kappa| <= a_lat_aero + a_lat_max / v_max^2 = 0.0167 1/m
+    (R >= 60 m: here 100 m), v_max."""
+    cfg = dataclasses.replace(FREE, a_lat_aero=0.01, v_max=30.0)
+    for left in (True, False):
+        v = speed_profile(arc(20.0, 30.0, left=left), cfg)
+        assert_allclose(v, math.sqrt(150.0), rtol=1e-9)
+        assert v[5] ** 2 * 0.05 == pytest.approx(6.0 + 0.01 * v[5] ** 2)
+    assert_allclose(speed_profile(arc(100.0, 30.0), cfg), 30.0, rtol=1e-12)
 
 
 def test_no_waypoints_give_no_speeds() -> None:

@@ -18,20 +18,14 @@ from scipy.spatial import Delaunay
 from conesim.core.messages import Header
 from conesim.core.pose import Pose2D
 from conesim.localization.frames import Buffer, TransformStamped
-from conesim.planner import MidlineConfig, kernels
-from conesim.planner.bridges import ConeSet, delaunay_edges, median
+from conesim.planner import MidlineConfig, SpeedProfileConfig, kernels
+from conesim.planner.bridges import ConeSet, delaunay_edges
 from conesim.planner.classify import LEFT, RIGHT, ClassifiedCones, side_of_path
-from conesim.planner.geometry import (
-    PathProjector,
-    StationAxis,
-    arc_length,
-    polyline_crosses,
-    segments_cross,
-)
+from conesim.planner.geometry import PathProjector, StationAxis, arc_length, crosses_boundary
 from conesim.planner.midline import check_path, cones_to_sensor
-from conesim.planner.ordering import chain_nearest
-from conesim.planner.speed_profile import menger_curvature, speed_profile
+from conesim.planner.speed_profile import profile_curvature, speed_profile
 from conesim.tracks.global_path import global_path_from_centreline
+from tests.planner.kernels.geometry_reference import axis_difference, segments_cross, window_mask
 
 
 def loop_path(closed: bool = True) -> PathProjector:
@@ -47,7 +41,7 @@ def loop_path(closed: bool = True) -> PathProjector:
 def test_project_around_is_the_two_step_projection(
     closed: bool, penalty: float, hint: float | None
 ) -> None:
-    """One shared k-d tree query: the sensor projected alone, then all with the window."""
+    """``project_around`` in one call: the sensor projected alone, then all with the window."""
     projector = loop_path(closed)
     rng = np.random.default_rng(1)
     for _ in range(20):
@@ -74,8 +68,10 @@ def test_window_shortcut_is_the_segment_mask(closed: bool) -> None:
     for centre in centres:
         for back, ahead in ((20.0, 35.0), (0.0, 0.0), (0.05, 0.05), (0.0, 1e-3), (3.0, 0.0)):
             window = (centre - back, centre + ahead)
-            expected = bool(projector.window_mask(*window).any())
-            assert (projector._preference(window, 2.0) is not None) == expected, window
+            expected = bool(window_mask(projector, *window).any())
+            table, half_max = projector._table, projector._half_max
+            got = kernels.window_overlaps(*window, table, length, closed, half_max)
+            assert got == expected, window
 
 
 def test_cones_to_sensor_maps_points_and_tangents_in_one_call() -> None:
@@ -108,7 +104,7 @@ def test_cones_to_sensor_maps_points_and_tangents_in_one_call() -> None:
         assert_array_equal(got.tangent, transform.transform_points(cones.points + tangent) - points)
 
 
-def test_polyline_crosses_is_any_segment_crossing() -> None:
+def test_crossing_test_is_any_segment_crossing() -> None:
     """The straddle prefilter finds exactly the crossings of the full pairwise test."""
     rng = np.random.default_rng(2)
     for trial in range(300):
@@ -118,7 +114,7 @@ def test_polyline_crosses_is_any_segment_crossing() -> None:
         if trial % 3 == 0 and len(b0) and len(path) > 1:  # touching: ends on the path
             b0[0] = path[1]
         expected = len(path) > 1 and bool(np.any(segments_cross(path[:-1], path[1:], b0, b1)))
-        assert polyline_crosses(path, b0, b1) == expected
+        assert crosses_boundary(path, np.stack([b0, b1], axis=1)) == expected
 
 
 def test_bspline_evaluation_is_splev() -> None:
@@ -136,13 +132,11 @@ def test_bspline_evaluation_is_splev() -> None:
 
 
 def test_median_is_numpy_median() -> None:
-    """Odd and even counts, repeated values and NaN."""
+    """``kernels.median``: odd and even counts, repeated values and NaN."""
     rng = np.random.default_rng(4)
     for n in range(1, 40):
         values = np.round(rng.normal(0.0, 2.0, n), 1 if n % 3 else 6)
-        assert median(values) == float(np.median(values))
-        assert kernels.median(values) == float(np.median(values))  # the compiled one
-    assert math.isnan(median(np.array([1.0, math.nan, 2.0])))
+        assert kernels.median(values) == float(np.median(values))
     assert math.isnan(kernels.median(np.array([1.0, math.nan, 2.0])))
 
 
@@ -155,8 +149,8 @@ def test_arc_length_small_and_random() -> None:
     assert_array_equal(arc_length(points), expected)
 
 
-def test_cone_set_select_and_join() -> None:
-    """Mask and indices select what fancy indexing does; joining nothing is the same set."""
+def test_cone_set_select() -> None:
+    """Mask and indices select what fancy indexing does, in the same dtypes."""
     rng = np.random.default_rng(6)
     n = 12
     cones = ConeSet(
@@ -174,7 +168,6 @@ def test_cone_set_select_and_join() -> None:
         for name in ("points", "side", "offset", "station", "tangent", "virtual"):
             assert_array_equal(getattr(picked, name), getattr(cones, name)[keep], err_msg=name)
             assert getattr(picked, name).dtype == getattr(cones, name).dtype
-    assert cones.join(cones.select(np.zeros(n, dtype=bool))) is cones
 
 
 def test_delaunay_edges_in_scipy_neighbour_order() -> None:
@@ -201,7 +194,7 @@ def reference_chain(
     """The ordering walk as first written: full rows as lists, a generator per step."""
     x, y = midpoints[:, 0], midpoints[:, 1]
     dist = np.hypot(np.subtract.outer(x, x), np.subtract.outer(y, y))
-    advance = axis.difference(station[None, :], station[:, None])
+    advance = axis_difference(axis, station[None, :], station[:, None])
     step = np.where(
         (dist <= config.max_step)
         & (advance <= config.max_station_step)
@@ -241,7 +234,9 @@ def test_chain_nearest_is_the_reference_walk() -> None:
         axis = StationAxis(60.0, closed=trial % 2 == 0)
         station = mid[:, 0] + rng.normal(0.0, 0.3, m)
         first = int(rng.integers(0, m))
-        got = chain_nearest(mid, station, first, axis, config).tolist()
+        got = kernels.chain_nearest(
+            mid, station, first, axis.length, axis.closed, config.ordering_settings
+        ).tolist()
         assert got == reference_chain(mid, station, first, axis, config)
 
 
@@ -265,7 +260,8 @@ def test_menger_curvature_and_known_arc_length() -> None:
         points = np.cumsum(rng.normal(0.0, 0.5, (n, 2)), axis=0)
         if n > 4:
             points[3] = points[2]  # a zero step: no curvature there
-        assert_array_equal(menger_curvature(points), reference_menger(points))
+        pointwise = SpeedProfileConfig(curvature_window=0.0)
+        assert_array_equal(profile_curvature(points, pointwise), reference_menger(points))
         assert_array_equal(speed_profile(points, s=arc_length(points)), speed_profile(points))
 
 

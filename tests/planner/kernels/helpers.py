@@ -1,16 +1,15 @@
-"""Scenes and numpy references shared by the kernels' tests (and ``test_fused``).
+"""Scenes and numpy references shared by the kernels' tests (and ``test_kernel_chains``).
 
 Random cones on a wobbly track (``random_cones``), a wobbly loop's projector
-(``loop_projector``), and the numpy formulations of the pair table and the
-track estimate as they stood before the kernels (``ref_pairs``,
-``ref_track``).
+(``loop_projector``), cone sets joined (``joined``) and their station gaps
+(``station_gap``), and the numpy formulations of the pair table, the cones'
+boundary offsets and the track estimate as they stood before the kernels
+(``ref_pairs``, ``ref_boundary_offset``, ``ref_track``).
 
 Each test's reference is the numpy formulation the kernel replaced (as it
 stood before the kernels), compared exactly on random inputs that include
 ties (points on a grid), zero-length steps and closed (wrapped) station
-axes. The whole planning step was also compared before and after on 718
-recorded scenes (synthetic winding tracks and every shipped track, ideal and
-noisy detectors): identical outputs.
+axes.
 """
 
 from __future__ import annotations
@@ -24,8 +23,9 @@ from conesim.planner.bridges import (
     ConeSet,
     TrackEstimate,
 )
-from conesim.planner.geometry import PathProjector, StationAxis, station_difference
+from conesim.planner.geometry import IntArray, PathProjector, StationAxis
 from conesim.tracks.global_path import global_path_from_centreline
+from tests.planner.kernels.geometry_reference import axis_difference, station_difference
 
 
 def ref_pairs(cones: ConeSet, config: MidlineConfig) -> tuple[np.ndarray, ...]:
@@ -51,6 +51,31 @@ def ref_pairs(cones: ConeSet, config: MidlineConfig) -> tuple[np.ndarray, ...]:
         np.subtract.outer(ol, or_),
         0.5 * (np.add.outer(ol, or_)),
     )
+
+
+def joined(first: ConeSet, then: ConeSet) -> ConeSet:
+    """``first`` followed by ``then`` (``first`` itself when ``then`` is empty)."""
+    if len(then) == 0:
+        return first
+    return ConeSet(
+        points=np.concatenate([first.points, then.points]),
+        side=np.concatenate([first.side, then.side]),
+        offset=np.concatenate([first.offset, then.offset]),
+        station=np.concatenate([first.station, then.station]),
+        tangent=np.concatenate([first.tangent, then.tangent]),
+        virtual=np.concatenate([first.virtual, then.virtual]),
+        axis=first.axis,
+    )
+
+
+def station_gap(cones: ConeSet, i: IntArray, j: IntArray) -> np.ndarray:
+    """|station[j] - station[i]|, wrapped on a closed path [m]."""
+    return np.abs(axis_difference(cones.axis, cones.station[j], cones.station[i]))
+
+
+def ref_boundary_offset(track: TrackEstimate, cones: ConeSet) -> np.ndarray:
+    """``kernels.boundary_offset`` with numpy: ``side * (offset - centre) - width / 2``."""
+    return cones.side * (cones.offset - track.centre) - 0.5 * track.width
 
 
 def ref_track(cones: ConeSet, config: MidlineConfig) -> TrackEstimate:

@@ -49,7 +49,7 @@ def test_kernels_are_deterministic() -> None:
 
 def test_import_without_a_writable_cache_directory() -> None:
     """No cache directory numba can write: the planner's (each module of ``kernels``,
-    ``fused``) and the EKF's kernels compile uncached, each module with its warning."""
+    ``kernel_chains``) and the EKF's kernels compile uncached, each module with its warning."""
 
     script = """
 import pkgutil
@@ -68,7 +68,8 @@ import numpy as np
 owners = {str(w.message).split(":")[0] for w in caught if "no writable cache" in str(w.message)}
 modules = {f"conesim.planner.kernels.{m.name}" for m in pkgutil.iter_modules(kernels.__path__)}
 assert len(modules) == 10, modules
-assert owners == modules | {"conesim.planner.fused", "conesim.localization.ekf.kernels"}, caught
+expected = modules | {"conesim.planner.kernel_chains", "conesim.localization.ekf.kernels"}
+assert owners == expected, caught
 assert kernels.arc_length(np.array([[0.0, 0.0], [3.0, 4.0]])).tolist() == [0.0, 5.0]
 p = np.array([[1.0, 2.0], [4.0, 3.0]])
 assert ekf_kernels.symmetrised(p).tolist() == [[1.0, 3.0], [3.0, 3.0]]
@@ -90,11 +91,11 @@ from conesim.localization.frames import Buffer, TransformStamped
 from conesim.tracks.global_path import global_path_from_centreline
 from conesim.core.messages import ConeDetections, Header
 from conesim.core.pose import Pose2D
-from conesim.planner import AutopilotConfig, fused, kernels
+from conesim.planner import AutopilotConfig, kernel_chains, kernels
 from conesim.planner.autopilot import Autopilot
 from conesim.planner.midline import PlanStatus
 
-modules = [fused] + [importlib.import_module(f"conesim.planner.kernels.{m.name}")
+modules = [kernel_chains] + [importlib.import_module(f"conesim.planner.kernels.{m.name}")
                      for m in pkgutil.iter_modules(kernels.__path__)]
 
 def loaded():
@@ -131,7 +132,7 @@ for pilot in pilots:
 assert ok > 30, ok
 assert loaded() == after_warm_up, (after_warm_up, loaded())
 assert {"profile_limits", "profile_passes", "spline_path", "project_around", "plan_cones",
-        "plan_midpoints", "window_overlaps"} <= {k.rsplit(".", 1)[1] for k in loaded()}
+        "plan_midpoints", "project_window"} <= {k.rsplit(".", 1)[1] for k in loaded()}
 print("ok")
 """
     run_child(script)

@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_array_equal
 
-from conesim.planner.geometry import PathProjector
+from conesim.planner import geometry, kernels
+from conesim.planner.geometry import PathProjector, Projection
+from tests.planner.kernels.geometry_reference import axis_difference
 from tests.planner.kernels.helpers import loop_projector
 
 
@@ -29,7 +31,7 @@ def ref_projection(
     score = d2
     if prefer is not None:
         centre, half, penalty = prefer
-        away = np.abs(projector.axis.difference(table[:, 5], centre))
+        away = np.abs(axis_difference(projector.axis, table[:, 5], centre))
         score = np.sqrt(d2) + np.where(away <= half + table[:, 6], 0.0, penalty)
     mx = points[:, 0, None] - (table[:, 0] + 0.5 * dx)
     my = points[:, 1, None] - (table[:, 1] + 0.5 * dy)
@@ -40,6 +42,21 @@ def ref_projection(
     )
     rows = np.arange(len(points))
     return seg, t[rows, seg], d2[rows, seg]
+
+
+def searched(
+    projector: PathProjector, points: np.ndarray, prefer: tuple[float, float, float] | None
+) -> Projection:
+    """The kernels' search and projection with the window ``prefer`` (centre, half width,
+    penalty) [m], None for none, as ``kernel_chains.project_window`` calls them."""
+    centre, half, penalty = (0.0, 0.0, 0.0) if prefer is None else prefer
+    table = projector._table
+    seg, t, d2 = kernels.nearest_segments(
+        points, table, projector._blocks, geometry._BLOCK, prefer is not None, centre, half,
+        penalty, projector.length, projector.closed,
+    )  # fmt: skip
+    foot, station, offset, tangent, distance = kernels.project_rows(points, seg, t, d2, table)
+    return Projection(foot, seg, station, offset, tangent, distance)
 
 
 @pytest.mark.parametrize("closed", [True, False])
@@ -55,7 +72,7 @@ def test_nearest_segments_is_the_exhaustive_search(
         points = rng.uniform(-45.0, 45.0, (60, 2))
         if grid:
             points = np.round(points * 2.0) / 2.0
-        got = projector._project(np.ascontiguousarray(points), prefer)
+        got = searched(projector, np.ascontiguousarray(points), prefer)
         seg, t, d2 = ref_projection(projector, points, prefer)
         assert_array_equal(got.segment, seg)
         assert_array_equal(got.distance, np.sqrt(d2))

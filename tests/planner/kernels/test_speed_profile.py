@@ -1,8 +1,9 @@
 """The compiled speed profile (``planner.kernels.speed_profile``) is the numpy steps.
 
-The reference is ``speed_profile``'s numpy and Python body as it stood
-before it was compiled (friction-ellipse passes, jerk limit, downforce),
-compared byte for byte.
+The reference (``speed_profile_reference``) is ``speed_profile``'s numpy and
+Python body as it stood before it was compiled (friction-ellipse passes,
+jerk limit, downforce), compared byte for byte; the drive pass and the
+curvature alone too, as the autopilot and the global speed plan call them.
 """
 
 from __future__ import annotations
@@ -11,64 +12,14 @@ import itertools
 import math
 
 import numpy as np
-from numpy.testing import assert_array_equal
+import pytest
+from numpy.testing import assert_allclose, assert_array_equal
 
 from conesim.planner import SpeedProfileConfig
 from conesim.planner.geometry import arc_length
-from conesim.planner.speed_profile import (
-    _menger,
-    backward_pass,
-    curvature_limit,
-    ellipse_backward_pass,
-    ellipse_forward_pass,
-    forward_pass,
-    jerk_limit,
-    speed_profile,
-    window_mean,
-)
-
-
-def ref_speed_profile(
-    points: np.ndarray,
-    config: SpeedProfileConfig,
-    v_start: float | None = None,
-    *,
-    s: np.ndarray | None = None,
-    v_end: float | None = None,
-) -> np.ndarray:
-    """``speed_profile`` as numpy and Python steps: its body before it was compiled."""
-    n = len(points)
-    if n == 0:
-        return np.zeros(0)
-    step = points[1:] - points[:-1]
-    step_length = np.hypot(step[:, 0], step[:, 1])
-    if s is None:
-        s = np.zeros(n)
-        np.cumsum(step_length, out=s[1:])  # arc_length(points)
-    kappa = _menger(points, step, step_length)
-    if config.curvature_window > 0.0 and n > 2:
-        kappa = window_mean(kappa, float(s[-1]) / (n - 1), config.curvature_window)
-    v = curvature_limit(kappa, config)
-    jerk = jerk_limit(kappa, float(s[-1]) / (n - 1), config) if n > 2 else None
-    if jerk is not None:
-        v = np.minimum(v, jerk)
-    if v_start is not None:
-        v[0] = min(v[0], max(v_start, 0.0))
-    if config.friction_ellipse:
-        c = config
-        v = ellipse_forward_pass(
-            s, v, kappa, c.a_drive, a_lat_max=c.a_lat_max, a_lat_aero=c.a_lat_aero
-        )
-    else:
-        v = forward_pass(s, v, config.a_drive)
-    if config.horizon_stop:
-        v[-1] = 0.0 if v_end is None else min(v[-1], max(v_end, 0.0))
-    if config.friction_ellipse:
-        c = config
-        return ellipse_backward_pass(
-            s, v, kappa, c.a_brake, a_lat_max=c.a_lat_max, a_lat_aero=c.a_lat_aero
-        )
-    return backward_pass(s, v, config.a_brake)
+from conesim.planner.speed_profile import forward_pass, profile_curvature, speed_profile
+from tests.planner.kernels import speed_profile_reference as ref
+from tests.planner.kernels.speed_profile_reference import ref_speed_profile
 
 
 def assert_bits_equal(got: np.ndarray, expected: np.ndarray) -> None:
@@ -204,3 +155,122 @@ def test_speed_profile_is_the_numpy_steps_on_the_global_paths() -> None:
         laps = np.vstack([pts, pts, pts, pts[:1]]) if path.closed else pts
         for config in PROFILE_CONFIGS[::7]:
             assert_bits_equal(speed_profile(laps, config), ref_speed_profile(laps, config))
+
+
+def test_drive_pass_is_the_numpy_pass() -> None:
+    """``forward_pass`` (the autopilot's, compiled) is the reference's closed form,
+    bit for bit: random limits and steps, zero steps, NaN and inf limits."""
+    rng = np.random.default_rng(29)
+    for trial in range(400):
+        n = int(rng.integers(0, 80))
+        s = np.cumsum(rng.choice([0.0, 0.25, 0.5], n) if trial % 3 == 0 else rng.uniform(0, 1, n))
+        limit = rng.uniform(0.0, 30.0, n)
+        if n > 4 and trial % 5 == 0:
+            limit[int(rng.integers(0, n))] = [math.nan, math.inf][trial % 2]
+        a_drive = float(rng.choice([0.5, 3.0, 9.81]))
+        with np.errstate(invalid="ignore"):
+            expected = ref.forward_pass(s, limit, a_drive)
+        assert_bits_equal(forward_pass(s, limit, a_drive), expected)
+
+
+def reference_curvature(points: np.ndarray, window: float) -> np.ndarray:
+    """The curvature as the global speed plan computed it with the numpy steps."""
+    kappa = ref.menger_curvature(points)
+    if window > 0.0 and len(points) > 2:
+        kappa = ref.window_mean(kappa, float(arc_length(points)[-1]) / (len(points) - 1), window)
+    return kappa
+
+
+def test_curvature_is_the_numpy_steps() -> None:
+    """``profile_curvature`` is Menger's curvature and its window mean as the numpy
+    steps compute them, bit for bit, for windows of none, one, several and all samples,
+    on random paths and along each shipped track's global path."""
+    from conesim.tracks import load_track, shipped_tracks
+    from conesim.tracks.global_path import global_path_for_track
+
+    rng = np.random.default_rng(30)
+    cases = [p for p in profile_cases(rng, 400) if np.isfinite(p).all()]
+    cases += [np.asarray(global_path_for_track(load_track(name)).xy) for name in shipped_tracks()]
+    for i, points in enumerate(cases):
+        window = [0.0, 0.3, 1.0, 2.0, 4.0, 1e6][i % 6]
+        config = SpeedProfileConfig(curvature_window=window)
+        assert_bits_equal(profile_curvature(points, config), reference_curvature(points, window))
+
+
+def test_reference_brake_pass_is_the_textbook_loop() -> None:
+    """The reference's closed-form brake pass equals the textbook loop (the drive
+    pass is held to its loop in ``tests/planner/test_speed_profile.py``)."""
+    rng = np.random.default_rng(1)
+    s = np.cumsum(rng.uniform(0.1, 1.0, 200))
+    bwd = rng.uniform(1.0, 20.0, 200)
+    expected = ref.backward_pass(s, bwd, 6.0)
+    for i in range(198, -1, -1):
+        bwd[i] = min(bwd[i], math.sqrt(bwd[i + 1] ** 2 + 2 * 6.0 * (s[i + 1] - s[i])))
+    assert_allclose(expected, bwd, rtol=1e-9)
+
+
+def test_reference_friction_ellipse_on_a_circle_from_rest() -> None:
+    """On R = 10 m (V^2 = a_lat R = 60), dv^2/ds = 2 a_d sqrt(1 - (v^2 / V^2)^2) from rest.
+
+    So arcsin(v^2 / V^2) = 2 a_d s / V^2: at s = 5 m, v^2 = 60 sin(0.5) = 28.77,
+    v = 5.363 m/s (a straight line gives sqrt(30) = 5.477); V is reached at
+    s = pi V^2 / (4 a_d) = 15.71 m. Fine steps: Euler error < 0.5 %.
+    """
+    s = np.arange(0.0, 30.0, 0.01)
+    kappa = np.full_like(s, 0.1)
+    limit = np.full_like(s, math.sqrt(60.0))
+    limit[0] = 0.0
+    v = ref.ellipse_forward_pass(s, limit, kappa, 3.0, a_lat_max=6.0)
+    assert v[500] == pytest.approx(math.sqrt(60.0 * math.sin(0.5)), rel=5e-3)
+    assert v[1500] < math.sqrt(60.0) < v[1600] + 1e-9
+
+
+def test_reference_friction_ellipse_brakes_less_in_the_corner() -> None:
+    """Braking to 5 m/s at the end of R = 10 m: the ellipse leaves less than a_brake.
+
+    Backwards from v^2 = 25 at the end: dv^2/ds = 2 a_b sqrt(1 - (v^2 / 60)^2),
+    so arcsin(v^2 / 60) grows by 2 a_b ds / 60 = 0.2 rad per metre with a_b = 6:
+    1 m back v^2 = 60 sin(arcsin(25 / 60) + 0.2) = 35.87 (without: 37).
+    On a straight (kappa = 0) the loops equal the closed-form passes.
+    """
+    s = np.arange(0.0, 10.001, 0.001)
+    limit = np.full_like(s, math.sqrt(60.0))
+    limit[-1] = 5.0
+    v = ref.ellipse_backward_pass(s, limit, np.full_like(s, 0.1), 6.0, a_lat_max=6.0)
+    expected = 60.0 * math.sin(math.asin(25.0 / 60.0) + 0.2)
+    assert v[-1001] ** 2 == pytest.approx(expected, rel=1e-3)
+    rng = np.random.default_rng(0)
+    s = np.cumsum(rng.uniform(0.1, 1.0, 100))
+    lim = rng.uniform(1.0, 20.0, 100)
+    zero = np.zeros(100)
+    assert_allclose(
+        ref.ellipse_forward_pass(s, lim, zero, 3.0, a_lat_max=6.0), ref.forward_pass(s, lim, 3.0)
+    )
+    assert_allclose(
+        ref.ellipse_backward_pass(s, lim, zero, 6.0, a_lat_max=6.0), ref.backward_pass(s, lim, 6.0)
+    )
+
+
+def test_reference_curvature_limit_with_downforce() -> None:
+    """v^2 |kappa| = a_lat_max + a_lat_aero v^2: |kappa| = 0.05 1/m, 6 m/s^2, 0.01 1/m
+    gives v = sqrt(6 / (0.05 - 0.01)) = 12.247 m/s; |kappa| <= 0.0167 1/m, v_max."""
+    cfg = SpeedProfileConfig(a_lat_max=6.0, a_lat_aero=0.01, v_max=30.0)
+    v = ref.curvature_limit(np.array([0.05, -0.05, 0.01, 0.0]), cfg)
+    assert_allclose(v[:2], math.sqrt(150.0), rtol=1e-12)
+    assert_allclose(v[2:], 30.0)
+
+
+def test_reference_jerk_limit_on_a_curvature_ramp() -> None:
+    """Curvature rising 0.01 1/m per metre: v <= (60 / 0.01)^(1/3) = 18.17 m/s.
+
+    Samples 0.5 m apart, the slope over a 4 m window (8 steps); flat curvature:
+    no limit. With J = inf there is none at all.
+    """
+    kappa = np.concatenate([np.zeros(20), 0.005 * np.arange(1, 21), np.full(20, 0.1)])
+    cfg = SpeedProfileConfig(lateral_jerk_max=60.0, jerk_window=4.0)
+    v = ref.jerk_limit(kappa, 0.5, cfg)
+    assert v is not None
+    assert_allclose(v[28:32], (60.0 / 0.01) ** (1 / 3), rtol=1e-9)
+    assert v[28] == pytest.approx(18.17, abs=0.01)
+    assert np.all(np.isinf(v[:15])) and np.all(np.isinf(v[-15:]))
+    assert ref.jerk_limit(kappa, 0.5, SpeedProfileConfig(lateral_jerk_max=math.inf)) is None

@@ -14,7 +14,12 @@ from conesim.planner.bridges import (
     virtual_partners,
 )
 from conesim.planner.midline import boundary_cones, in_view
-from tests.planner.kernels.helpers import random_cones, ref_pairs, ref_track
+from tests.planner.kernels.helpers import (
+    random_cones,
+    ref_boundary_offset,
+    ref_pairs,
+    ref_track,
+)
 
 
 @pytest.mark.parametrize("closed", [True, False])
@@ -35,7 +40,7 @@ def test_boundary_cones_pairs_track_and_partners(closed: bool) -> None:
         track = ref_track(real, config)
         assert estimate_track(pair_table(real, config), config) == track
         if track.measured:
-            real = real.select(track.boundary_offset(real) >= -config.boundary_tolerance)
+            real = real.select(ref_boundary_offset(track, real) >= -config.boundary_tolerance)
         got, pairs, got_track, dropped = boundary_cones(cones, config)
         assert got_track == track
         assert dropped == len(cones) - len(real)
@@ -54,6 +59,7 @@ def test_boundary_cones_pairs_track_and_partners(closed: bool) -> None:
         near = np.zeros(len(real), dtype=bool)
         near[left] = close.any(axis=1)
         near[right] = close.any(axis=0)
-        need = ~near & (np.abs(track.boundary_offset(real)) <= config.partner_offset_tolerance)
+        outside = ref_boundary_offset(track, real)
+        need = ~near & (np.abs(outside) <= config.partner_offset_tolerance)
         partners = virtual_partners(got, pairs, config, track)
         assert_array_equal(partners.station, real.station[need])

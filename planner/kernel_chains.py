@@ -1,39 +1,41 @@
 """The planning step's compiled stretches: consecutive step kernels chained in one call.
 
 ``reference_path_planning`` alternates compiled steps (``planner.kernels``)
-with scipy (``Delaunay``, ``splprep``), which stay Python calls. Between two
-scipy calls the steps used to be one compiled call each, through a typed
-wrapper that read its settings and built a dataclass: on a few dozen cones
-each such call cost as much as its loop (about 0.5 us to call, 0.1 us per
-argument, 1 us per array returned, plus the wrapper). Each function below
-runs one stretch of steps in one call; it calls the very step kernels the
-wrappers call (numba compiles the calls between jitted functions directly),
-so the numbers are theirs, bit for bit, and each step stays a named function
-that tests can call alone.
+with scipy (``Delaunay``, ``splprep``), which stay Python calls. Each
+function here runs the steps between two scipy calls in one compiled call,
+as a call into compiled code costs about as much as a step's loop on a few
+dozen cones. They call the very step kernels the steps' typed wrappers call
+(numba compiles calls between jitted functions directly), so the numbers
+are theirs, and each step stays a function that tests can call alone
+(``tests/planner/test_kernel_chains.py``).
 
-- ``plan_cones``: step 2 (``kernels.boundary_cones``), the nominal track when
-  the width is not measured (``bridges.track_estimate``), and step 3's virtual
+- ``plan_cones``: step 2 (``kernels.boundary_cones``) and step 3a's virtual
   partners (``kernels.partners_needed``, ``kernels.partner_points``), joined
   after the real cones.
-- ``project_around`` (classification): the window's origin, the window's
-  test and the search with its projections (``PathProjector.project_around``).
+- ``project_around`` (classification): the window's origin, then
+  ``project_window`` (``PathProjector.project_around``).
+- ``project_window``: the window's test and the search with its projections
+  (``PathProjector.project``).
 - ``plan_midpoints``: after the triangulation, step 3's edges and bridges
   (``kernels.delaunay_edges``, ``kernels.find_bridges``), step 4's ordering
   (``kernels.ordered_midpoints``) and the boundary edges step 6 checks against
   (``kernels.boundary_edges``, gathered into segments).
-- ``check_and_limit``: after the spline, step 6's arc length and crossing
-  test (``kernels.arc_length``, ``kernels.crosses_boundary``) and step 7's
+- ``check_and_limit``: after the spline, step 6's arc length, start distance
+  and crossing test (``kernels.arc_length``, ``kernels.crosses_boundary``) and step 7's
   speed limits (``kernels.profile_limits``; the cube root and the passes
   follow in ``speed_profile.profile_speeds``).
 
-The arguments are plain arrays and scalars (``kernels``' conventions); the
-callers are in ``midline``. Compiled with numba's on-disk cache like
-``kernels`` (``localization.compiled.cached_njit``); numba checks each cached
+The arguments are arrays, scalars and the settings groups of
+``planner.settings`` (``kernels``' conventions); the callers are in
+``midline`` and ``geometry``. Compiled with numba's on-disk cache like
+``kernels`` (``conesim.core.compiled.cached_njit``); numba checks each cached
 function against its own file only, so after editing a step kernel that a
 function here calls, run ``make clean-cache``.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -45,7 +47,7 @@ def _probe() -> None:
     """Nothing: what ``cached_njit`` asks numba to cache, from this file's directory."""
 
 
-_compiled = cached_njit(_probe, "conesim.planner.fused")
+_compiled = cached_njit(_probe, "conesim.planner.kernel_chains")
 
 
 @_compiled
@@ -60,8 +62,8 @@ def plan_cones(points, side, offset, station, tangent, length, closed, view, par
         tangent: (n, 2) the global path's direction at each.
         length: the station axis' length [m].
         closed: whether stations wrap.
-        view: ``kernels.boundary_cones``' settings (``MidlineConfig.view_settings``).
-        partners: nominal width, partner radius and offset tolerance [m]
+        view: step 2's ``settings.ViewSettings`` (``MidlineConfig.view_settings``).
+        partners: step 3a's ``settings.PartnerSettings``
             (``MidlineConfig.partner_settings``).
 
     Returns:
@@ -71,28 +73,15 @@ def plan_cones(points, side, offset, station, tangent, length, closed, view, par
         were dropped (n - k).
     """
     keep, left, right, dist, same, _, _, width, centre, measured = kernels.boundary_cones(
-        points, side, offset, station, length, closed, *view
+        points, side, offset, station, length, closed, view
     )
-    nominal_width, partner_radius, partner_tolerance = partners
-    if not measured:  # bridges.track_estimate
-        width = nominal_width
-        centre = 0.0
     k = len(keep)
     real_side = side[keep]
     real_offset = offset[keep]
     real_points = points[keep]
     real_tangent = tangent[keep]
     need = kernels.partners_needed(
-        real_side,
-        real_offset,
-        left,
-        right,
-        same,
-        dist,
-        partner_radius,
-        centre,
-        width,
-        partner_tolerance,
+        real_side, real_offset, left, right, same, dist, centre, width, partners
     )
     v = len(need)
     p_points, p_side, p_offset = kernels.partner_points(
@@ -138,7 +127,7 @@ def plan_cones(points, side, offset, station, tangent, length, closed, view, par
 @_compiled
 def plan_midpoints(  # noqa: PLR0917
     simplices, points, side, offset, station, virtual, length, closed,
-    checks, check_width, width, width_tolerance, shortest, sensor_station, ordering,
+    check_width, width, sensor_station, checks, ordering,
 ):  # fmt: skip
     """Steps 3 and 4 after the triangulation: bridges, boundary segments, ordered midpoints.
 
@@ -151,15 +140,13 @@ def plan_midpoints(  # noqa: PLR0917
         virtual: (n,) True for a virtual partner.
         length: the station axis' length [m].
         closed: whether stations wrap.
-        checks: min and max span, max length, max station gap [m]
-            (``MidlineConfig.bridge_settings``; the boundary edges use the
-            first and the last too).
         check_width: whether the span is checked against ``width``.
         width: the measured width [m].
-        width_tolerance: how far a span may be from it [m].
-        shortest: keep only the shortest valid bridge of each cone.
         sensor_station: the sensor's station [m].
-        ordering: ``kernels.ordered_midpoints``' settings
+        checks: step 3's ``settings.BridgeSettings``
+            (``MidlineConfig.bridge_settings``; the boundary edges use its
+            minimum span and station gap).
+        ordering: step 4's ``settings.OrderingSettings``
             (``MidlineConfig.ordering_settings``).
 
     Returns:
@@ -169,19 +156,16 @@ def plan_midpoints(  # noqa: PLR0917
     """
     edges = kernels.delaunay_edges(simplices, len(points))
     left, right, size, valid, used, mid, mid_station = kernels.find_bridges(
-        edges, points, side, offset, station, virtual, length, closed,
-        *checks, check_width, width, width_tolerance, shortest,
-    )  # fmt: skip
-    min_width = checks[0]
-    max_gap = checks[3]
-    rows = kernels.boundary_edges(edges, side, offset, station, length, closed, min_width, max_gap)
+        edges, points, side, offset, station, virtual, length, closed, check_width, width, checks
+    )
+    rows = kernels.boundary_edges(edges, side, offset, station, length, closed, checks)
     boundary = np.empty((len(rows), 2, 2))
     for q in range(len(rows)):
         for end in range(2):
             boundary[q, end, 0] = points[edges[rows[q], end], 0]
             boundary[q, end, 1] = points[edges[rows[q], end], 1]
     ordered = kernels.ordered_midpoints(
-        used, mid, mid_station, sensor_station, length, closed, *ordering
+        used, mid, mid_station, sensor_station, length, closed, ordering
     )
     path_length = kernels.arc_length(ordered)[-1]
     return left, right, size, valid, used, mid, mid_station, boundary, ordered, path_length
@@ -201,24 +185,18 @@ def project_around(  # noqa: PLR0917
 
     Args:
         points: (n, 2) [m], n >= 1, C-contiguous; the last is the origin's point.
-        table: the projector's (k, 9) segment table.
-        blocks: its (b, 3) bounding circles of ``size`` segments each.
+        table, blocks, size, penalty, length, closed, half_max: as
+            ``project_window``'s.
         back: the window starts this far behind the origin [m] ...
         ahead: ... and ends this far ahead [m].
-        penalty: added to segments outside the window [m]; <= 0: no window.
         has_centre: whether ``centre`` is the origin's station.
         centre: the origin's station [m] (read when ``has_centre``).
-        length: the path's length [m].
-        closed: whether stations wrap.
-        half_max: half the longest segment [m].
 
     Returns:
-        ``kernels.nearest_segments``' segments, then ``kernels.project_rows``'
-        foot, station, offset, tangent and distance.
+        ``project_window``'s.
     """
-    windowed = False
-    middle = 0.0
-    half = 0.0
+    lo = 0.0
+    hi = 0.0
     if penalty > 0.0:
         if not has_centre:
             last = points[-1:]
@@ -228,10 +206,45 @@ def project_around(  # noqa: PLR0917
             centre = kernels.project_rows(last, seg, t, d2, table)[1][0]
         lo = centre - back
         hi = centre + ahead
-        windowed = kernels.window_overlaps(lo, hi, table, length, closed, half_max)
-        if windowed:
-            middle = 0.5 * (lo + hi)
-            half = 0.5 * (hi - lo)
+    return project_window(
+        points, table, blocks, size, penalty > 0.0, lo, hi, penalty, length, closed, half_max
+    )
+
+
+@_compiled
+def project_window(  # noqa: PLR0917
+    points, table, blocks, size, has_window, lo, hi, penalty, length, closed, half_max
+):  # fmt: skip
+    """``PathProjector.project`` in one call: the window's test, then the search.
+
+    The window [lo, hi] applies when ``has_window``, ``penalty > 0`` and a
+    segment overlaps it (``kernels.window_overlaps``); then every point's
+    search (``kernels.nearest_segments``, segments outside the window
+    ``penalty`` farther) and projection (``kernels.project_rows``).
+
+    Args:
+        points: (n, 2) [m], C-contiguous.
+        table: the projector's (k, 9) segment table.
+        blocks: its (b, 3) bounding circles of ``size`` segments each.
+        has_window: whether [lo, hi] is a window to prefer.
+        lo: the window's first station [m] ...
+        hi: ... and its last [m] (wrapped on a closed path).
+        penalty: added to segments outside the window [m]; <= 0: no window.
+        length: the path's length [m].
+        closed: whether stations wrap.
+        half_max: half the longest segment [m].
+
+    Returns:
+        ``kernels.nearest_segments``' segments, then ``kernels.project_rows``'
+        foot, station, offset, tangent and distance.
+    """
+    windowed = (
+        has_window
+        and penalty > 0.0
+        and kernels.window_overlaps(lo, hi, table, length, closed, half_max)
+    )
+    middle = 0.5 * (lo + hi) if windowed else 0.0
+    half = 0.5 * (hi - lo) if windowed else 0.0
     seg, t, d2 = kernels.nearest_segments(
         points, table, blocks, size, windowed, middle, half, penalty if windowed else 0.0,
         length, closed,
@@ -242,23 +255,26 @@ def project_around(  # noqa: PLR0917
 
 @_compiled
 def check_and_limit(path, boundary, profile, limits):
-    """Step 6's arc length and crossing test, and step 7's limits, for a fresh path.
+    """Step 6's numbers (arc length, start distance, crossing) and step 7's limits.
 
     Args:
         path: (p, 2) the fitted path [m], C-contiguous.
         boundary: (e, 2, 2) the boundary segments it may not cross [m].
         profile: whether to compute the speed profile's limits.
-        limits: ``kernels.profile_limits``' settings
+        limits: step 7's ``settings.LimitSettings``
             (``SpeedProfileConfig.limit_settings``).
 
     Returns:
-        The arc length (max(p, 1),) [m] (``kernels.arc_length``), whether the
-        path crosses a boundary segment (``kernels.crosses_boundary``), and
+        The arc length (max(p, 1),) [m] (``kernels.arc_length``) and its last
+        value [m], the first point's distance from the origin [m]
+        (``np.hypot``; NaN without points), whether the path crosses a
+        boundary segment (``kernels.crosses_boundary``), and
         ``kernels.profile_limits``' (s, kappa, v, ratio) given that arc length
         (the arc length four times, unread, without ``profile`` or points).
     """
     s = kernels.arc_length(path)
+    start = np.hypot(path[0, 0], path[0, 1]) if len(path) > 0 else math.nan
     crosses = kernels.crosses_boundary(path, boundary)
     if profile and len(path) > 0:
-        return s, crosses, kernels.profile_limits(path, s, True, *limits)
-    return s, crosses, (s, s, s, s)
+        return s, s[len(s) - 1], start, crosses, kernels.profile_limits(path, s, True, limits)
+    return s, s[len(s) - 1], start, crosses, (s, s, s, s)

@@ -1,4 +1,4 @@
-"""The fused stages (``planner.fused``) give what the steps give one by one, bit for bit."""
+"""The kernel chains (``planner.kernel_chains``) give what the steps give one by one, exactly."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_array_equal
 
-from conesim.planner import MidlineConfig, SpeedProfileConfig, fused, kernels
+from conesim.planner import MidlineConfig, SpeedProfileConfig, kernel_chains, kernels
 from conesim.planner.bridges import (
     ConeSet,
     boundary_edges,
@@ -21,9 +21,8 @@ from conesim.planner.bridges import (
 )
 from conesim.planner.geometry import arc_length
 from conesim.planner.midline import boundary_cones, bridges_and_midpoints, cones_with_partners
-from conesim.planner.ordering import ordered_midpoints
 from conesim.planner.speed_profile import profile_speeds, speed_profile
-from tests.planner.kernels.helpers import random_cones, ref_track
+from tests.planner.kernels.helpers import joined, random_cones, ref_track
 
 
 def turned(rng: np.random.Generator, cones: ConeSet) -> ConeSet:
@@ -51,14 +50,14 @@ def test_partner_points_are_the_numpy_shift() -> None:
 
 
 @pytest.mark.parametrize("closed", [True, False])
-def test_fused_stages_are_the_steps(closed: bool) -> None:
+def test_chains_are_the_steps(closed: bool) -> None:
     """``cones_with_partners`` and ``bridges_and_midpoints`` against the steps composed."""
     rng = np.random.default_rng(41)
     for trial in range(150):
         cones = turned(rng, random_cones(rng, int(rng.integers(0, 70)), closed, trial % 3 == 0))
         config = MidlineConfig(bridge_selection="all" if trial % 5 == 0 else "shortest")
         real, pairs, track, dropped = boundary_cones(cones, config)
-        want = real.join(virtual_partners(real, pairs, config, track))
+        want = joined(real, virtual_partners(real, pairs, config, track))
         got, got_track, got_dropped = cones_with_partners(cones, config)
         assert (got_track, got_dropped) == (track, dropped)
         for field in ("points", "side", "offset", "station", "tangent", "virtual"):
@@ -75,13 +74,16 @@ def test_fused_stages_are_the_steps(closed: bool) -> None:
             name = field.name
             assert_array_equal(getattr(bridges, name), getattr(want_bridges, name), err_msg=name)
         assert_array_equal(boundary, want.points[boundary_edges(want, edges, config)])
-        want_mid = ordered_midpoints(bridges, sensor_station, want.axis, config)
+        want_mid = kernels.ordered_midpoints(
+            bridges.used, bridges.midpoints, bridges.station, sensor_station,
+            want.axis.length, want.axis.closed, config.ordering_settings,
+        )  # fmt: skip
         assert_array_equal(midpoints, want_mid)
         assert length == float(arc_length(want_mid)[-1])
 
 
 def test_no_cones_in_view() -> None:
-    """The fused stage on an empty view: no cones, nominal track, no bridges."""
+    """The chains on an empty view: no cones, nominal track, no bridges."""
     cones = random_cones(np.random.default_rng(42), 0, closed=False)
     got, track, dropped = cones_with_partners(cones, MidlineConfig())
     assert (len(got), track.measured, dropped) == (0, False, 0)
@@ -91,8 +93,9 @@ def test_no_cones_in_view() -> None:
 
 @pytest.mark.parametrize("profile", [True, False])
 def test_check_and_limit_is_the_steps(profile: bool) -> None:
-    """``fused.check_and_limit`` and ``profile_speeds``: the arc length, the crossing
-    test and ``speed_profile``'s speeds, for paths that cross the boundary and not."""
+    """``kernel_chains.check_and_limit`` and ``profile_speeds``: the arc length, the start
+    distance (``np.hypot``, also from 1 mm to 1 km), the crossing test and
+    ``speed_profile``'s speeds, for paths that cross the boundary and not."""
     rng = np.random.default_rng(43)
     configs = [
         SpeedProfileConfig(),
@@ -102,10 +105,15 @@ def test_check_and_limit_is_the_steps(profile: bool) -> None:
     for trial in range(60):
         n = int(rng.integers(1, 60))
         path = np.cumsum(rng.normal(0.5, 0.2, (n, 2)), axis=0)
+        path[0] *= 10.0 ** rng.uniform(-3.0, 3.0)
         boundary = rng.uniform(-5.0, 30.0, (int(rng.integers(0, 8)), 2, 2))
         config = configs[trial % len(configs)]
-        s, crosses, limits = fused.check_and_limit(path, boundary, profile, config.limit_settings)
+        s, length, start, crosses, limits = kernel_chains.check_and_limit(
+            path, boundary, profile, config.limit_settings
+        )
         assert_array_equal(s, arc_length(path))
+        assert length == s[-1]
+        assert start == float(np.hypot(path[0, 0], path[0, 1]))
         assert crosses == kernels.crosses_boundary(path, boundary)
         if profile:
             v_start = None if trial % 2 else float(rng.uniform(0.0, 10.0))
