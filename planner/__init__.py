@@ -1,6 +1,6 @@
 """Planner: cone side classification, Delaunay midline, speed profile, pure pursuit.
 
-The seed's nodes as plain functions, and one class wiring them at their rates:
+The ROS pipeline's nodes as plain functions, and one class wiring them at their rates:
 
 - :func:`classify_cones_by_side` (``classify``): detections -> left/right cones
   in ``reference``.

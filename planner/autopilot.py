@@ -6,7 +6,7 @@ localization), the global path, and the messages it receives.
 - Cone detections (10 Hz, ``/sorted_cones_time``) trigger
   ``classify_cones_by_side`` at the detection's stamp (if the frame tree has
   no transform there yet, at the latest one, counted in ``tf_latest_count``)
-  and ``reference_path_planning`` with the latest transform, as in the seed.
+  and ``reference_path_planning`` with the latest transform, as in the ROS pipeline.
   With ``speed_source = "global"`` the waypoints' speeds are then the
   global path's speed plan at their stations (``planner.global_speed``),
   limited to what the car reaches accelerating from its speed.
@@ -84,7 +84,7 @@ CONTROL_RATE = 50.0  # [Hz] ARCHITECTURE.md: pure pursuit and speed control
 
 def default_config(localization: str) -> AutopilotConfig:
     """The autopilot's settings for a localization mode: ``AutopilotConfig.cautious()``
-    with ``raw`` (the seed's broadcaster: a pose up to 150 ms old), else the defaults."""
+    with ``raw`` (the ROS pipeline's broadcaster: a pose up to 150 ms old), else the defaults."""
     return AutopilotConfig.cautious() if localization == "raw" else AutopilotConfig()
 
 

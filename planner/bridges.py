@@ -20,7 +20,7 @@ Steps of ``reference_path_planning`` that work on cones in ``os_sensor``:
    boundary.
 2. ``delaunay_edges``: the edges of scipy's Delaunay triangulation of all cones.
 3. ``find_bridges``: the edges that join a left cone to a right cone (the
-   seed's ``/delaunay_internal_lines``), each checked:
+   ROS pipeline's ``/delaunay_internal_lines``), each checked:
 
    - ``offset_left - offset_right`` within [min_track_width, max_track_width],
      and within ``width_tolerance`` of the measured width when there is one:

@@ -1,12 +1,12 @@
 """classify_cones_by_side: which cones bound the track on the left, which on the right.
 
-The seed's node, step by step:
+The ROS pipeline's node, step by step:
 
 1. ``cones_to_reference``: the detected cones (``os_sensor``, (n, 3)) are taken
-   to the ground (z = 0, as the seed does) and mapped into ``reference``
+   to the ground (z = 0, as the ROS pipeline does) and mapped into ``reference``
    through the frame tree at the detection's stamp.
 2. ``PathProjector.project``: each cone is projected onto its nearest
-   global-path segment (foot, station, signed offset, tangent). The seed
+   global-path segment (foot, station, signed offset, tangent). The ROS pipeline
    takes the nearest segment of the whole path; here segments outside the
    stretch from ``window_back`` behind to ``window_ahead`` ahead of the
    sensor's station count ``window_penalty`` farther, so that on a path that
@@ -18,7 +18,7 @@ The seed's node, step by step:
    sensor is first projected onto the whole path.
 3. ``side_of_path``: the sign of the 2D cross product of the segment's
    direction with the vector from the segment to the cone: > 0 left, else
-   right (the seed's ``else`` branch takes a cone exactly on the path as right).
+   right (the ROS pipeline's ``else`` branch takes a cone exactly on the path as right).
 
 Colour mode (``ClassifierConfig.mode == "colour"``) trusts the detector's colour
 where it names a side: ``left_colours`` (default blue) are left,
@@ -61,7 +61,7 @@ _DEFAULT_CONFIG = ClassifierConfig()  # frozen: built once
 
 @dataclass(frozen=True, slots=True)
 class ClassifiedCones:
-    """Cones sorted by side, in ``reference`` (the seed's left/right cone markers).
+    """Cones sorted by side, in ``reference`` (the ROS pipeline's left/right cone markers).
 
     Each array has one row per kept cone, in detection order.
 
@@ -172,7 +172,7 @@ def _ground_to_reference(
 
 
 def side_of_path(offset: FloatArray) -> NDArray[np.int8]:
-    """Step 3, the seed's rule: ``LEFT`` where the cross product is > 0, else ``RIGHT``.
+    """Step 3, the ROS pipeline's rule: ``LEFT`` where the cross product is > 0, else ``RIGHT``.
 
     Compiled (``kernels.side_of_path``): one loop instead of a comparison and a ``where``.
     """
@@ -209,7 +209,7 @@ def classify_cones_by_side(
         detections: the cones (``/sorted_cones_time``), (n, 3) in ``os_sensor``.
         buffer: the frame tree.
         path: the global path, or a projector built on it once (faster).
-        config: mode and colour rule; defaults to the seed's geometric mode.
+        config: mode and colour rule; defaults to the ROS pipeline's geometric mode.
         time: lookup time [s]; None uses the detection's stamp.
         station_hint: the sensor's last station [m], if known.
         reference_frame: the world frame.

@@ -76,7 +76,7 @@ class ClassifierConfig(Settings):
     """Settings of ``classify_cones_by_side``.
 
     Attributes:
-        mode: ``"geometric"`` (the seed: side of the nearest global-path
+        mode: ``"geometric"`` (the ROS pipeline: side of the nearest global-path
             segment, colour ignored) or ``"colour"`` (a colour listed below
             decides; any other colour, and a colour-blind detection, falls back
             to geometric).
@@ -89,7 +89,7 @@ class ClassifierConfig(Settings):
             circle: 57 m) so that it holds one pass only.
         window_penalty: segments outside the stretch count this much farther
             [m]: on a path passing the same place twice (skidpad) the current
-            pass wins near-ties. 0 gives the seed's plain nearest segment,
+            pass wins near-ties. 0 gives the ROS pipeline's plain nearest segment,
             ``inf`` projects onto the stretch only.
     """
 
@@ -151,7 +151,7 @@ class MidlineConfig(Settings):
             that happen to pass the other checks).
         bridge_selection: ``"shortest"`` keeps, of the valid bridges, those
             that are the shortest bridge of one of their cones (the rungs
-            across the track); ``"all"`` keeps every valid bridge (the seed).
+            across the track); ``"all"`` keeps every valid bridge (the ROS pipeline).
         start_min_x: the first midpoint must lie ahead of this x [m].
         start_station_back: and no more than this behind the sensor's station [m].
         start_station_ahead: and no more than this ahead of it [m].
@@ -166,7 +166,7 @@ class MidlineConfig(Settings):
         spline_degree: B-spline degree (splprep ``k``).
         spline_sigma: expected midpoint noise; splprep smoothing
             ``s = m * sigma^2`` for m points (0 interpolates) [m].
-        spacing: arc-length step of the resampled path [m] (seed: 0.5 m).
+        spacing: arc-length step of the resampled path [m] (spec 000: 0.5 m).
         max_start_distance: the path must start this close to the sensor [m].
         min_path_length: a shorter path is not sound [m].
     """
@@ -197,7 +197,7 @@ class MidlineConfig(Settings):
     min_spline_points: int = 4
     spline_degree: int = 3
     spline_sigma: float = 0.0  # [m]
-    spacing: float = 0.5  # [m] seed
+    spacing: float = 0.5  # [m] spec 000
     max_start_distance: float = 10.0  # [m]
     # 4 m: a path shorter than pure pursuit's lookahead puts the target at its
     # end; at the skidpad's crossing a 2 m path steered the car to full lock.
@@ -476,7 +476,7 @@ class AutopilotConfig(Settings):
             path beyond the end, in none, at the same lap times. The steering
             still follows the cones wherever they reach that far; beyond
             them it follows the global path as the pose places it (with the
-            seed's raw pose, 150 ms late, up to 0.7 m off the cone path's
+            ROS pipeline's raw pose, 150 ms late, up to 0.7 m off the cone path's
             end). Needs ``global_speed`` (the global path's stations and
             curvature; the lookahead cap reads the curvature beyond the
             cones too).
@@ -510,7 +510,7 @@ class AutopilotConfig(Settings):
         friction ellipse at the same 6 m/s^2 (the defaults: 14 + 0.0143 v^2,
         8, 25).
 
-        The seed's raw broadcaster publishes the last fix and the last heading:
+        The ROS pipeline's raw broadcaster publishes the last fix and the last heading:
         its pose is 50 ms (fix latency) to 150 ms (plus a 10 Hz fix period) old,
         1-3 m behind the car at 20 m/s. Driven at the defaults the car left
         trackdrive and autocross with it; at these limits every shipped

@@ -1,6 +1,6 @@
 """Plane geometry of the planner: projection onto a polyline, stations, crossings.
 
-Projection onto the nearest segment (the seed's ``classify_cones_by_side``):
+Projection onto the nearest segment (the ROS pipeline's ``classify_cones_by_side``):
 for a point ``p`` and a segment from ``a`` with direction ``d``::
 
     t    = clip(((p - a) . d) / |d|^2, 0, 1)      foot = a + t d

@@ -1,6 +1,6 @@
-"""The planner's outputs as messages, one per seed topic.
+"""The planner's outputs as messages, one per ROS pipeline topic.
 
-| seed topic | type here | frame |
+| ROS topic | type here | frame |
 |---|---|---|
 | ``/left_cone_marker``, ``/right_cone_marker`` | :class:`ConeMarker` | ``reference`` |
 | ``/local_planned_path`` | :class:`LocalPath` | ``os_sensor`` |
@@ -54,7 +54,7 @@ class LocalPath:
 
 @dataclass(frozen=True, slots=True)
 class Waypoints:
-    """Waypoints with target speeds (the seed's ``Waypoint`` list and speed bars).
+    """Waypoints with target speeds (the ROS pipeline's ``Waypoint`` list and speed bars).
 
     Attributes:
         header: planning stamp, frame ``os_sensor``.

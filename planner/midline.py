@@ -1,9 +1,9 @@
 """reference_path_planning: the local path between the cones, in ``os_sensor``.
 
-The seed's node, step by step (each step named as a function):
+The ROS pipeline's node, step by step (each step named as a function):
 
 1. ``cones_to_sensor``: left and right cones from ``reference`` into
-   ``os_sensor`` with the latest transform (seed: ``Time(0)``).
+   ``os_sensor`` with the latest transform (spec 000: ``Time(0)``).
 2. ``in_view``: cones within ``max_range``, ahead of ``min_x``, and between
    ``min_boundary_offset`` and ``max_boundary_offset`` from the global path
    (others are false positives, not boundary cones); then, once the track's
@@ -378,7 +378,7 @@ def reference_path_planning(
         speed_config: speed profile limits.
         v_start: current speed, the profile's start [m/s]; None leaves it free.
         previous: the last plan, carried forward when this one is not sound.
-        time: lookup time [s]; :data:`LATEST` as in the seed.
+        time: lookup time [s]; :data:`LATEST` as in the ROS pipeline.
         sensor_frame: the frame the path is planned in.
         speeds: how the waypoints get their speeds, ``speeds(path, s)`` with
             ``s`` the path's arc length (None for a path carried forward);

@@ -3,14 +3,14 @@
 ``fit_path`` fits scipy's parametric B-spline (``splprep``, chord-length
 parameter, degree ``spline_degree``, smoothing ``s = m * spline_sigma^2``)
 through m ordered midpoints, then places points every ``spacing`` of arc
-length (seed: 0.5 m) on it: the spline is sampled every ``spacing / 2``, the
+length (spec 000: 0.5 m) on it: the spline is sampled every ``spacing / 2``, the
 arc length of that polyline gives the parameter of each output point
 (``numpy.interp``), and the spline is evaluated there. The points lie on the
 spline; their spacing is off by the polyline's chord error, relative
 ``(h kappa)^2 / 24``, 1e-3 at h = 0.25 m and R = 3 m. With fewer than
 ``min_spline_points`` midpoints, or when ``splprep`` fails or warns (FITPACK's
 ``ier > 0``, read from ``full_output`` rather than by turning warnings into
-errors), the midpoints are joined by straight lines instead (the seed's
+errors), the midpoints are joined by straight lines instead (the ROS pipeline's
 fallback).
 
 Written for speed: after ``splprep``, the sampling, its arc length, the

@@ -1,6 +1,6 @@
 """Step 4: the bridges' midpoints in driving order, from the nearest one in front.
 
-The seed sorts the midpoints "starting from the nearest in front of the
+The ROS pipeline sorts the midpoints "starting from the nearest in front of the
 vehicle, chaining through nearest neighbours". Two guards keep the chain on
 one stretch of track, using each midpoint's station along the global path
 (the mean of its cones' stations; ``settings.OrderingSettings`` names the

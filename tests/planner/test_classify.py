@@ -91,7 +91,7 @@ def test_colour_mode_trusts_blue_and_yellow_only(synth: ModuleType, straight) ->
 
 
 def test_colour_mode_without_colours_is_the_seed_rule(synth: ModuleType, circle) -> None:
-    """A colour-blind detection in colour mode classifies exactly as the seed does."""
+    """A colour-blind detection in colour mode classifies exactly as the ROS pipeline does."""
     scene = synth.make_scene(circle, synth.pose_on(circle, 0))
     config = ClassifierConfig(mode="colour")
     a = classify_cones_by_side(scene.detections, scene.buffer, circle.global_path, config)

@@ -25,7 +25,7 @@ def brute_force(points: np.ndarray, xy: np.ndarray, closed: bool, allowed=None) 
 
 
 def test_seed_projection_on_one_segment() -> None:
-    """The seed's rule on (0,0)->(10,0): foot, station, signed offset and side, to 1e-8 m."""
+    """The ROS pipeline's rule on (0,0)->(10,0): foot, station, signed offset, side, 1e-8 m."""
     path = global_path_from_centreline([[0.0, 0.0], [10.0, 0.0]], closed=False)
     proj = PathProjector(path).project(np.array([[4.0, 2.0], [4.0, -1.0], [12.0, 1.0]]))
     assert_allclose(proj.foot, [[4.0, 0.0], [4.0, 0.0], [10.0, 0.0]], atol=1e-8)

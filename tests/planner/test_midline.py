@@ -321,7 +321,7 @@ def test_spline_path_lies_on_the_fitted_spline() -> None:
 
 
 def test_fitpack_flag_falls_back_to_straight_lines(monkeypatch: pytest.MonkeyPatch) -> None:
-    """splprep reporting ier > 0 (a FITPACK warning) gives the polyline, as the seed."""
+    """splprep reporting ier > 0 (a FITPACK warning) gives the polyline, as the ROS pipeline."""
     import conesim.planner.spline
 
     real = conesim.planner.spline.splprep
