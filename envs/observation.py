@@ -104,6 +104,34 @@ class SensorMemory:
             elif isinstance(msg, Imu) and math.isfinite(msg.yaw_rate):
                 self.yaw_rate = msg.yaw_rate
 
+    def cone_block(
+        self, max_cones: int
+    ) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], NDArray[np.float32]]:
+        """(cones, mask, colours, flat [x, y, m] * K) of the latest detection.
+
+        Built once per detection and kept; callers copy what they hand out.
+        """
+        det = self.detections
+        block = self._cone_block
+        if block is not None and block[0] is det and block[1] == max_cones:
+            return block[2], block[3], block[4], block[5]
+        cones = np.zeros((max_cones, 2), dtype=np.float32)
+        mask = np.zeros(max_cones, dtype=np.float32)
+        colours = np.zeros((max_cones, len(CONE_COLOURS)), dtype=np.float32)
+        if det is not None and len(det):
+            pts = np.asarray(det.points[:, :2], dtype=float)
+            finite = np.all(np.isfinite(pts), axis=1)
+            rows = np.flatnonzero(finite)[:max_cones]
+            n = len(rows)
+            cones[:n] = np.clip(pts[rows], -CONE_BOUND, CONE_BOUND)
+            mask[:n] = 1.0
+            if det.colours is not None:
+                for k, row in enumerate(rows):
+                    colours[k, CONE_COLOURS.index(det.colours[row])] = 1.0
+        flat = np.column_stack([cones, mask]).ravel()
+        self._cone_block = (det, max_cones, cones, mask, colours, flat)
+        return cones, mask, colours, flat
+
 
 def build_observation(
     memory: SensorMemory,
@@ -141,7 +169,7 @@ def build_observation(
         ),
         EGO_HIGH,
     )  # np.clip's values, without its wrapper's cost
-    cones, mask, colours, flat = _cone_block(memory, max_cones)
+    cones, mask, colours, flat = memory.cone_block(max_cones)
     if mode == "vector":
         out = np.empty(EGO_SIZE + flat.size, dtype=np.float32)
         out[:EGO_SIZE] = ego
@@ -171,32 +199,3 @@ def build_observation(
         "pose_valid": np.array([0.0 if at is None else 1.0], dtype=np.float32),
         "cones_age": np.array([age], dtype=np.float32),
     }
-
-
-def _cone_block(
-    memory: SensorMemory, max_cones: int
-) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], NDArray[np.float32]]:
-    """(cones, mask, colours, flat [x, y, m] * K) of the memory's latest detection.
-
-    Built once per detection and kept in the memory; callers copy what they hand out.
-    """
-    det = memory.detections
-    block = memory._cone_block
-    if block is not None and block[0] is det and block[1] == max_cones:
-        return block[2], block[3], block[4], block[5]
-    cones = np.zeros((max_cones, 2), dtype=np.float32)
-    mask = np.zeros(max_cones, dtype=np.float32)
-    colours = np.zeros((max_cones, len(CONE_COLOURS)), dtype=np.float32)
-    if det is not None and len(det):
-        pts = np.asarray(det.points[:, :2], dtype=float)
-        finite = np.all(np.isfinite(pts), axis=1)
-        rows = np.flatnonzero(finite)[:max_cones]
-        n = len(rows)
-        cones[:n] = np.clip(pts[rows], -CONE_BOUND, CONE_BOUND)
-        mask[:n] = 1.0
-        if det.colours is not None:
-            for k, row in enumerate(rows):
-                colours[k, CONE_COLOURS.index(det.colours[row])] = 1.0
-    flat = np.column_stack([cones, mask]).ravel()
-    memory._cone_block = (det, max_cones, cones, mask, colours, flat)
-    return cones, mask, colours, flat

@@ -118,3 +118,23 @@ def test_the_rules_cover_every_package() -> None:
     assert set(ALLOWED) == set(FOLDERS)
     for package, folder in FOLDERS.items():
         assert (folder / "__init__.py").is_file(), package
+
+
+def test_no_module_reads_another_objects_private_state() -> None:
+    """``x._name`` only on ``self`` or ``cls``: adapters read what objects return
+    or expose, never another object's private attributes."""
+    bad = []
+    for package in FOLDERS:
+        for path in sources(package):
+            tree = ast.parse(path.read_text(), filename=str(path))
+            for node in ast.walk(tree):
+                private = (
+                    isinstance(node, ast.Attribute)
+                    and node.attr.startswith("_")
+                    and not node.attr.startswith("__")
+                )
+                if private and not (
+                    isinstance(node.value, ast.Name) and node.value.id in ("self", "cls")
+                ):
+                    bad.append(f"{path.relative_to(ROOT)}:{node.lineno}: {ast.unparse(node)}")
+    assert not bad, "\n".join(bad)
