@@ -75,9 +75,8 @@ class PolylineProgress:
         perpendicular where the foot is inside the segment).
         """
         px, py = float(xy[0]), float(xy[1])
-        i, d2, u, offset = (
-            self._walk(px, py, self._last) if self._last is not None else (self._search(px, py))
-        )
+        i = self._last
+        i, d2, u, offset = self._search(px, py) if i is None else self._walk(px, py, i)
         self._last = i
         sx, sy = self._starts_list[i]
         tx, ty = self._tangents_list[i]
@@ -135,13 +134,17 @@ class PolylineProgress:
         meaning, on plain floats).
         """
         i = self._last
-        if i is None:
-            i, d2, u, offset = self._search(px, py)
-            self._last = i
-            tx, ty = self._tangents_list[i]
-            lateral = _offset(offset, d2, u, self._lengths_list[i])
-            return float(self._s0[i] + u), lateral, i, tx, ty
-        # The walk of ``_walk`` with ``_foot`` and ``_step`` inlined.
+        i, d2, u, offset = self._search(px, py) if i is None else self._walk(px, py, i)
+        self._last = i
+        tx, ty = self._tangents_list[i]
+        return self._s0_list[i] + u, _offset(offset, d2, u, self._lengths_list[i]), i, tx, ty
+
+    def _walk(self, px: float, py: float, i: int) -> tuple[int, float, float, float]:
+        """From segment i on to each neighbour while it is nearer: (segment,
+        distance^2, the foot's arc position u, perpendicular offset).
+
+        Plain floats, the segment's foot written out: it runs every physics step.
+        """
         segments = self._segments
         n = len(segments)
         closed = self.closed
@@ -165,41 +168,7 @@ class PolylineProgress:
                 if d2 >= best_d2:
                     break
                 i, best_d2, best_u, best_lat = j, d2, u, tx * fy - ty * fx
-        self._last = i
-        tx, ty = self._tangents_list[i]
-        lateral = _offset(best_lat, best_d2, best_u, self._lengths_list[i])
-        return self._s0_list[i] + best_u, lateral, i, tx, ty
-
-    def _foot(self, i: int, px: float, py: float) -> tuple[float, float, float]:
-        """Distance^2 to segment i, the foot's arc position u, and lateral offset."""
-        sx, sy = self._starts_list[i]
-        tx, ty = self._tangents_list[i]
-        rx, ry = px - sx, py - sy
-        u = min(max(rx * tx + ry * ty, 0.0), self._lengths_list[i])
-        fx, fy = rx - tx * u, ry - ty * u
-        return fx * fx + fy * fy, u, tx * fy - ty * fx
-
-    def _step(self, i: int, di: int) -> int | None:
-        j = i + di
-        n = len(self._starts_list)
-        if self.closed:
-            return j % n
-        return j if 0 <= j < n else None
-
-    def _walk(self, px: float, py: float, i: int) -> tuple[int, float, float, float]:
-        """From segment i to the neighbour while it is nearer: (segment,
-        distance^2, the foot's arc position u, perpendicular offset)."""
-        best = self._foot(i, px, py)
-        for di in (1, -1):
-            while True:
-                j = self._step(i, di)
-                if j is None:
-                    break
-                cand = self._foot(j, px, py)
-                if cand[0] >= best[0]:
-                    break
-                i, best = j, cand
-        return i, *best
+        return i, best_d2, best_u, best_lat
 
 
 def _offset(lateral: float, d2: float, u: float, length: float) -> float:
