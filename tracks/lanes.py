@@ -177,7 +177,7 @@ def _finish(
     else:
         direction = _unit(_point_at(mid, lines[0].s + 0.25) - _point_at(mid, lines[0].s - 0.25))
     return TrackGeometry(
-        centreline=np.array(centreline),
+        centreline=centreline,
         widths=dl + dr,
         left_boundary=np.array(left, dtype=float),
         right_boundary=np.array(right, dtype=float),

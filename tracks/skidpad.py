@@ -190,7 +190,7 @@ def skidpad_geometry(
     )
     dense_line = Polyline(dense)
     centre = dense_line.resample(CENTRELINE_SPACING)
-    centreline = np.array(centre.points)
+    centreline = centre.points
     cum = dense_line.stations
     nearest = np.clip(np.searchsorted(cum, centre.stations), 0, len(dense) - 1)
     widths = np.choose(section[nearest].astype(int), [lane_width, right.width, left.width])

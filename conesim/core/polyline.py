@@ -99,19 +99,21 @@ class Polyline:
         A closed polyline wraps the stations modulo :attr:`end_station`; an
         open one clamps them to its ends.
         """
-        pts = self.ring
-        return np.column_stack(
-            [self.interpolate(pts[:, 0], stations), self.interpolate(pts[:, 1], stations)]
-        )
+        query, cum, pts = self._wrap(stations), self.stations, self.ring
+        return np.column_stack([np.interp(query, cum, pts[:, 0]), np.interp(query, cum, pts[:, 1])])
 
-    def interpolate(self, values: ArrayLike, stations: ArrayLike) -> FloatArray:
+    def interpolate(self, values: FloatArray, stations: ArrayLike) -> FloatArray:
         """Values given at the points of :attr:`ring`, (k + 1,), at arc lengths
         ``stations`` [m] (any shape), linear in station; wrapped or clamped as in :meth:`at`."""
-        cum = self.stations
-        s = np.asarray(stations, dtype=float)
-        query = np.mod(s, cum[-1]) if self.closed else np.clip(s, 0.0, cum[-1])
-        out: FloatArray = np.asarray(np.interp(query, cum, np.asarray(values, dtype=float)))
+        out: FloatArray = np.asarray(np.interp(self._wrap(stations), self.stations, values))
         return out
+
+    def _wrap(self, stations: ArrayLike) -> FloatArray:
+        """``stations`` [m] modulo :attr:`end_station` (closed) or clamped to [0, it] (open)."""
+        s = np.asarray(stations, dtype=float)
+        end = self.stations[-1]
+        wrapped: FloatArray = np.mod(s, end) if self.closed else np.minimum(np.maximum(s, 0.0), end)
+        return wrapped
 
     def resample(self, spacing: float, start: float = 0.0) -> Polyline:
         """The polyline through points evenly spaced about ``spacing`` [m] apart.
