@@ -94,7 +94,7 @@ def latency(
     to ``Delaunay`` (empty arrays without it).
     """
     centre, cones = winding_track(n_view)
-    projector = PathProjector(global_path_from_centreline(centre, closed=False))
+    projector = PathProjector(global_path_from_centreline(centre, closed=False).polyline)
     config = MidlineConfig(max_range=VIEW + 2.0)
     t_cls, t_plan, seen, t_scipy, triangulated = [], [], [], [], []
     positions = np.linspace(10, len(centre) - 100, repeats).astype(int)
@@ -181,7 +181,7 @@ def accuracy(track_name: str, profile_name: str, step: int) -> tuple[float, floa
 
     track = load_track(track_name)
     path = global_path_for_track(track)
-    projector = PathProjector(path)
+    projector = PathProjector(path.polyline)
     detector = ConeDetector(get_profile(profile_name).cones, seed=0)
     kinds = tuple(str(k) for k in track.kinds)
     closed = str(track.layout) == "closed"

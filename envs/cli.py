@@ -176,7 +176,7 @@ def cmd_track_show(name: str, out: str) -> int:
     red = int(path.high_covariance.sum())
     print(
         f"wrote {written}: {track.name}, {len(track.cones)} cones, global path "
-        f"{path.length_m:.1f} m with {red} of {len(path.cov)} points above "
+        f"{path.polyline.length:.1f} m with {red} of {len(path.cov)} points above "
         f"cov {path.cov_threshold:g} m^2 (red)"
     )
     return EXIT_OK

@@ -35,21 +35,24 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import splev, splprep
 
+from conesim.core.polyline import Polyline
 from conesim.sim.vehicle_params import VehicleParams
 
 FloatArray = NDArray[np.float64]
 STEP_M = 0.25  # [m] resampling step of the centreline
 
 
-def centreline_curvature(points: FloatArray, closed: bool) -> tuple[FloatArray, FloatArray]:
-    """Arc-length stations and curvature along ``points``.
+def centreline_grid(points: FloatArray, closed: bool) -> tuple[FloatArray, FloatArray]:
+    """Arc-length stations and curvature along ``points``, ``STEP_M`` apart.
 
     An interpolating cubic spline (``splprep`` with s = 0, periodic for a
     loop) goes through the given points, which lie on the curve; it is
-    evaluated every ``STEP_M`` of arc length with its analytic curvature.
+    sampled every ``STEP_M`` of its arc length, and the curvature at each
+    sample is the polyline's through the samples (``Polyline.curvature``,
+    the circle through a sample and its neighbours).
 
     Returns:
-        (s (k,) [m], kappa (k,) [1/m]), ``STEP_M`` apart.
+        (s (k,) [m], kappa (k,) [1/m]).
     """
     pts = np.asarray(points, dtype=float)
     if closed:
@@ -63,11 +66,8 @@ def centreline_curvature(points: FloatArray, closed: bool) -> tuple[FloatArray, 
     length = float(s_dense[-1])
     n = max(8, round(length / STEP_M))
     s = np.linspace(0.0, length, n, endpoint=not closed)
-    u = np.interp(s, s_dense, dense)
-    dx, dy = splev(u, tck, der=1)
-    ddx, ddy = splev(u, tck, der=2)
-    kappa = (dx * ddy - dy * ddx) / np.power(dx * dx + dy * dy, 1.5)
-    return s, np.asarray(kappa, dtype=float)
+    samples = np.column_stack(splev(np.interp(s, s_dense, dense), tck))
+    return s, Polyline(samples, closed).curvature()
 
 
 def qss_speed_profile(
@@ -150,7 +150,7 @@ def limit_lap_time(
     ``timed_to_s`` (default its end), as a timed run past two timing lines.
     """
     p = params or VehicleParams()
-    s, kappa = centreline_curvature(centreline, closed)
+    s, kappa = centreline_grid(centreline, closed)
     if closed:
         v = qss_speed_profile(s, kappa, closed, p)
         ds = np.full(len(s), s[1] - s[0])

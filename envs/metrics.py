@@ -23,10 +23,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
+from conesim.core.polyline import Polyline
 from conesim.envs.loop import StepRecord
 from conesim.planner.midline import PlanStatus
 from conesim.tracks import Track
-from conesim.tracks.polyline import cumulative_length, interpolate_at
 
 MIDLINE_SAMPLE_M = 0.05  # [m] spacing of the densified true centreline
 
@@ -106,7 +106,5 @@ def _rms(values: list[float]) -> float | None:
 
 def _dense_centreline_tree(track: Track) -> cKDTree:
     """The true centreline every ``MIDLINE_SAMPLE_M``, as a k-d tree."""
-    centre = np.asarray(track.centreline)
-    closed = track.layout == "closed"
-    fine = np.arange(0.0, cumulative_length(centre, closed)[-1], MIDLINE_SAMPLE_M)
-    return cKDTree(interpolate_at(centre, closed, fine))
+    centre = Polyline(track.centreline, track.layout == "closed")
+    return cKDTree(centre.at(np.arange(0.0, centre.end_station, MIDLINE_SAMPLE_M)))

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from conesim.core.geodesy import GeodesyError
+from conesim.core.polyline import Polyline
 from conesim.envs.bag import BagRecorder
 from conesim.envs.limit_lap import limit_lap_time
 from conesim.envs.loop import ClosedLoop, EpisodeRules, StepRecord, world_seed
@@ -84,14 +85,14 @@ def timed_limit_lap(track: Track) -> float:
     centre = np.asarray(track.centreline)
     if track.layout == "closed":
         return limit_lap_time(centre, True)
-    seg = np.hypot(*np.diff(centre, axis=0).T)
-    s = np.concatenate([[0.0], np.cumsum(seg)])
+    line = Polyline(centre)
+    s = line.stations
     finishes = line_crossings_along(centre, False, np.asarray(track.finish_line))
     if track.layout == "skidpad" and len(finishes) >= 2:
         mask = (s >= finishes[0]) & (s < finishes[1])
         return limit_lap_time(centre[mask], True)
     starts = line_crossings_along(centre, False, np.asarray(track.start_finish))
-    start_s = PolylineProgress(centre, False).project(track.start_pose.xy).s
+    start_s = float(PolylineProgress(line).project(track.start_pose.xy).station[0])
     return limit_lap_time(
         centre,
         False,

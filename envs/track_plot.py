@@ -67,8 +67,8 @@ def draw_track(ax: Axes, track: Track, global_path: GlobalPath | None = None) ->
 
 def draw_global_path(ax: Axes, path: GlobalPath) -> None:
     """The global path as a line strip, each segment coloured by its start point's status."""
-    starts, deltas = path.segments
-    segments = np.stack([starts, starts + deltas], axis=1)
+    ring = path.polyline.ring
+    segments = np.stack([ring[:-1], ring[1:]], axis=1)
     red = path.high_covariance[: len(segments)]
     colours = [PATH_RED if r else PATH_GREEN for r in red]
     ax.add_collection(LineCollection(list(segments), colors=colours, linewidths=2.0, zorder=1))

@@ -20,6 +20,7 @@ tree and the global path. It never imports ``sim``.
 
 from __future__ import annotations
 
+from conesim.core.projection import Projection
 from conesim.planner.autopilot import Autopilot
 from conesim.planner.classify import LEFT, RIGHT, ClassifiedCones, classify_cones_by_side
 from conesim.planner.config import (
@@ -30,7 +31,7 @@ from conesim.planner.config import (
     SpeedControlConfig,
     SpeedProfileConfig,
 )
-from conesim.planner.geometry import PathProjector, Projection
+from conesim.planner.geometry import PathProjector
 from conesim.planner.messages import (
     BridgeLines,
     ConeMarker,

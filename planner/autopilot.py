@@ -151,7 +151,7 @@ def warm_up_planner() -> None:
     detections = ConeDetections(
         Header(1.0, FRAME_OS_SENSOR), np.column_stack([cones, np.zeros(len(cones))])
     )
-    projector = PathProjector(global_path_from_centreline(centre, closed=False))
+    projector = PathProjector(global_path_from_centreline(centre, closed=False).polyline)
     plan = reference_path_planning(classify_cones_by_side(detections, buffer, projector), buffer)
     speed_profile(plan.path, v_start=1.0, s=arc_length(plan.path), v_end=1.0)
     projector.project(centre[-1:], window=(30.0, 40.0))  # the pursuit's look beyond the path
@@ -181,7 +181,7 @@ class Autopilot:
         self.buffer = buffer
         self.config = config or AutopilotConfig()
         self.control_rate = float(control_rate)
-        self.projector = PathProjector(global_path)
+        self.projector = PathProjector(global_path.polyline)
         self.global_speed = (
             GlobalSpeedPlan(global_path, self.config.speed_profile)
             if self.config.global_speed

@@ -221,7 +221,7 @@ def classify_cones_by_side(
         The frame tree's errors unchanged (the autopilot decides what to do).
     """
     config = config or _DEFAULT_CONFIG
-    projector = path if isinstance(path, PathProjector) else PathProjector(path)
+    projector = path if isinstance(path, PathProjector) else PathProjector(path.polyline)
     # The cones and, last, the sensor, whose station is the window's origin
     # (``station_hint``, or the sensor's own projection onto the whole path).
     both, finite, stamp = _ground_to_reference(detections, buffer, time, reference_frame)

@@ -1,4 +1,4 @@
-"""Plane geometry of the planner: projection onto a polyline, stations, crossings.
+"""Plane geometry of the planner: projection onto the global path, stations, crossings.
 
 Projection onto the nearest segment (the ROS pipeline's ``classify_cones_by_side``):
 for a point ``p`` and a segment from ``a`` with direction ``d``::
@@ -39,43 +39,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from conesim.core.polyline import Polyline
+from conesim.core.projection import Projection
 from conesim.planner import kernel_chains, kernels
-from conesim.tracks.global_path import GlobalPath
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
-
-
-@dataclass(frozen=True, slots=True)
-class Projection:
-    """Points projected onto a path's nearest segments.
-
-    Attributes:
-        foot: (n, 2) nearest point on the path [m].
-        segment: (n,) index of the nearest segment.
-        station: (n,) arc length from the path's start to the foot [m].
-        offset: (n,) signed distance from the segment's line, + left [m].
-        tangent: (n, 2) unit direction of the nearest segment.
-        distance: (n,) distance to the foot [m].
-    """
-
-    foot: FloatArray
-    segment: IntArray
-    station: FloatArray
-    offset: FloatArray
-    tangent: FloatArray
-    distance: FloatArray
-
-    def select(self, rows: slice | IntArray) -> Projection:
-        """The projections of some of the points."""
-        return Projection(
-            self.foot[rows],
-            self.segment[rows],
-            self.station[rows],
-            self.offset[rows],
-            self.tangent[rows],
-            self.distance[rows],
-        )
 
 
 _BLOCK = 16  # segments per bounding circle of the search (``kernels.nearest_segments``)
@@ -87,26 +56,26 @@ _SX, _SY, _DX, _DY, _INV_LEN2, _MID_STATION, _HALF_LENGTH, _LENGTH, _STATION0 = 
 
 
 class PathProjector:
-    """Nearest-segment projection onto a global path (compiled search over bounding circles).
+    """Nearest-segment projection onto a polyline (compiled search over bounding circles).
 
     Args:
-        path: the global path in ``reference``; a closed path includes the
-            segment from its last point back to its first.
+        line: the global path in ``reference`` (``GlobalPath.polyline``); a
+            closed one includes the segment from its last point back to its
+            first. Segments of length 0 are left out.
 
     Attributes:
-        length: total arc length [m].
+        line: the polyline.
+        length: its length [m] (``Polyline.length``).
         closed: whether stations wrap around at ``length``.
     """
 
-    def __init__(self, path: GlobalPath) -> None:
-        starts, deltas = path.segments
-        lengths = np.hypot(deltas[:, 0], deltas[:, 1])
-        keep = lengths > 0.0
-        self._start = starts[keep]
-        self._delta = deltas[keep]
-        self._length = lengths[keep]
+    def __init__(self, line: Polyline) -> None:
+        keep = line.segment_lengths > 0.0
+        self._start = line.ring[:-1][keep]
+        self._delta = line.deltas[keep]
+        self._length = line.segment_lengths[keep]
         self._half_length = 0.5 * self._length
-        self._station0 = np.concatenate([[0.0], np.cumsum(self._length)[:-1]])
+        self._station0 = line.stations[:-1][keep]
         self._mid_station = self._station0 + self._half_length
         self._half_max = 0.5 * float(self._length.max())
         self._blocks = _bounding_circles(self._start, self._delta)
@@ -123,9 +92,9 @@ class PathProjector:
                 self._station0,
             ]
         )
-        self.length = float(self._length.sum())
-        self.closed = bool(path.closed)
-        self.path = path
+        self.length = line.length
+        self.closed = line.closed
+        self.line = line
         self._axis = StationAxis(self.length, self.closed)
 
     def project(
@@ -251,26 +220,11 @@ def crosses_boundary(points: FloatArray, boundary: FloatArray) -> bool:
 
 
 def arc_length(points: FloatArray) -> FloatArray:
-    """Cumulative arc length of an (n, 2) polyline, starting at 0 [m]; shape (max(n, 1),).
+    """``Polyline(points).stations`` of an open (n, 2) polyline [m]; shape (max(n, 1),).
 
-    The running sum of ``np.hypot`` of the steps, as ``np.cumsum`` adds
-    (compiled: ``kernels.arc_length``).
+    The same numbers, compiled (``kernels.arc_length``): the local paths'
+    stations are taken several times per control step, where building a
+    ``Polyline`` costs more than the sum.
     """
     s: FloatArray = kernels.arc_length(np.ascontiguousarray(points, dtype=float).reshape(-1, 2))
     return s
-
-
-def resample_polyline(points: FloatArray, spacing: float) -> FloatArray:
-    """Points every ``spacing`` [m] of arc length along an (n, 2) polyline, ends included.
-
-    The last point is the polyline's end, so the last step may be shorter.
-    """
-    s = arc_length(points)
-    total = float(s[-1])
-    if total <= 0.0:
-        return points[:1].copy()
-    stations = np.arange(0.0, total, spacing)
-    if total - stations[-1] > 1e-9:
-        stations = np.append(stations, total)
-    x = np.interp(stations, s, points[:, 0])
-    return np.column_stack([x, np.interp(stations, s, points[:, 1])])

@@ -8,8 +8,8 @@ For waypoints p_0..p_{n-1} at arc lengths s_i:
                / (|p_i - p_{i-1}| |p_{i+1} - p_i| |p_{i+1} - p_{i-1}|)
 
    exactly 1/R for points on a circle of radius R (+ left turn); the end
-   points take their neighbour's value; averaged over ``curvature_window``
-   (``profile_curvature``).
+   points take their neighbour's value (``Polyline.curvature``, compiled
+   here); averaged over ``curvature_window`` (``profile_curvature``).
 2. Curvature limit: v_i = min(v_max, sqrt(a_lat_max / |kappa_i|)); with
    downforce the lateral limit grows with speed, a_lat(v) = a_lat_max +
    a_lat_aero v^2, and v^2 |kappa| = a_lat(v) gives
@@ -186,8 +186,9 @@ def _drive_only(a_drive: float) -> PassSettings:
 def profile_curvature(points: FloatArray, config: SpeedProfileConfig | None = None) -> FloatArray:
     """Step 1: the curvature (n,) [1/m] the profile reads along an (n, 2) path [m].
 
-    Menger's curvature, + turning left, averaged over ``config.curvature_window``
-    (point by point when it is 0).
+    ``Polyline(points).curvature()`` (Menger's, + turning left), computed in
+    the compiled ``kernels.profile_limits`` with the same numbers, averaged
+    over ``config.curvature_window`` (point by point when it is 0).
     """
     c = config or _DEFAULT_CONFIG
     pts = np.ascontiguousarray(points, dtype=float).reshape(-1, 2)

@@ -28,9 +28,10 @@ from __future__ import annotations
 import numpy as np
 from scipy.interpolate import splprep
 
+from conesim.core.polyline import Polyline
 from conesim.planner import kernels
 from conesim.planner.config import MidlineConfig
-from conesim.planner.geometry import FloatArray, arc_length, resample_polyline
+from conesim.planner.geometry import FloatArray, arc_length
 
 _SAMPLES_PER_STEP = 2  # spline samples per output step, for the arc length
 
@@ -87,4 +88,4 @@ def fit_path(
         path = spline_through(midpoints, config, length)
         if path is not None:
             return path
-    return resample_polyline(midpoints, config.spacing)
+    return np.array(Polyline(midpoints).sample_every(config.spacing).points)

@@ -11,59 +11,45 @@ reset) searches globally with a ``cKDTree`` and then a window of segments.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-
-@dataclass(frozen=True, slots=True)
-class Projection:
-    """Where a point lies relative to the polyline.
-
-    Attributes:
-        s: arc length of the foot point from the polyline's start [m].
-        lateral: signed distance to the foot point, left of the driving
-            direction positive [m]: the perpendicular offset, or, where the
-            foot is a segment's end (beyond either end of an open polyline,
-            outside a corner), the distance to that end.
-        index: segment index of the foot point.
-        tangent: (2,) unit tangent of that segment.
-    """
-
-    s: float
-    lateral: float
-    index: int
-    tangent: tuple[float, float]
+from conesim.core.polyline import Polyline
+from conesim.core.projection import Projection
 
 
 class PolylineProgress:
     """Project points onto a polyline, tracking the segment between calls.
 
     Args:
-        points: (m, 2) polyline vertices in driving order [m].
-        closed: whether the last vertex joins the first.
-        window_m: half-width of the search window around the last segment [m].
+        line: the polyline in driving order, at least 2 points, no two
+            consecutive ones equal.
+        window_m: half-width of the search window around the nearest vertex [m].
+
+    Attributes:
+        line: the polyline.
+        closed: whether its last vertex joins the first.
+        length: its length [m] (``Polyline.length``).
     """
 
-    def __init__(self, points: NDArray[np.float64], closed: bool, window_m: float = 15.0) -> None:
-        pts = np.asarray(points, dtype=float).reshape(-1, 2)
-        if len(pts) < 2:
+    def __init__(self, line: Polyline, window_m: float = 15.0) -> None:
+        if len(line) < 2:
             raise ValueError("PolylineProgress needs at least 2 points")
-        self.closed = closed
-        ring = np.vstack([pts, pts[:1]]) if closed else pts
-        self._starts = ring[:-1]
-        self._deltas = np.diff(ring, axis=0)
-        self._lengths = np.hypot(self._deltas[:, 0], self._deltas[:, 1])
+        self.line = line
+        self.closed = line.closed
+        self._starts = line.ring[:-1]
+        self._deltas = line.deltas
+        self._lengths = line.segment_lengths
         if np.any(self._lengths <= 0.0):
             raise ValueError("PolylineProgress: repeated consecutive points")
         self._tangents = self._deltas / self._lengths[:, None]
-        self._s0 = np.concatenate([[0.0], np.cumsum(self._lengths)[:-1]])
-        self.length = float(self._lengths.sum())
+        self._s0 = line.stations[:-1]
+        self.length = line.length
         step = float(np.median(self._lengths))
         self._window = max(2, math.ceil(window_m / step))
-        self._tree = cKDTree(pts)
+        self._tree = cKDTree(line.points)
         # Plain-float copies for the scalar walk (faster than numpy per element).
         self._starts_list = [(float(a), float(b)) for a, b in self._starts]
         self._tangents_list = [(float(a), float(b)) for a, b in self._tangents]
@@ -82,17 +68,34 @@ class PolylineProgress:
         self._last = None
 
     def project(self, xy: NDArray[np.float64] | tuple[float, float]) -> Projection:
-        """Project one point [m]."""
-        if self._last is not None:
-            return self._walk(float(xy[0]), float(xy[1]), self._last)
-        p = np.asarray(xy, dtype=float)
+        """Project one point (2,) [m]: a ``Projection`` of one row.
+
+        Its station and segment are :meth:`project_xy`'s; its ``lateral``
+        is the same offset to within rounding (``project_xy`` keeps the
+        perpendicular where the foot is inside the segment).
+        """
+        px, py = float(xy[0]), float(xy[1])
+        i = self._last
+        i, d2, u, offset = self._search(px, py) if i is None else self._walk(px, py, i)
+        self._last = i
+        sx, sy = self._starts_list[i]
+        tx, ty = self._tangents_list[i]
+        return Projection(
+            foot=np.array([[sx + tx * u, sy + ty * u]]),
+            segment=np.array([i], dtype=np.intp),
+            station=np.array([self._s0_list[i] + u]),
+            offset=np.array([offset]),
+            tangent=np.array([[tx, ty]]),
+            distance=np.array([math.sqrt(d2)]),
+        )
+
+    def _search(self, px: float, py: float) -> tuple[int, float, float, float]:
+        """The nearest of the segments within the window around the nearest
+        vertex: (segment, distance^2, the foot's arc position u, perpendicular offset)."""
+        p = np.array([px, py])
         n = len(self._starts)
-        if self._last is None:
-            _, nearest = self._tree.query(p)
-            center = int(nearest)
-        else:
-            center = self._last
-        idx = np.arange(center - self._window, center + self._window + 1)
+        _, nearest = self._tree.query(p)
+        idx = np.arange(int(nearest) - self._window, int(nearest) + self._window + 1)
         idx = np.mod(idx, n) if self.closed else idx[(idx >= 0) & (idx < n)]
         rel = p - self._starts[idx]
         u = np.clip(np.einsum("ij,ij->i", rel, self._tangents[idx]), 0.0, self._lengths[idx])
@@ -100,13 +103,9 @@ class PolylineProgress:
         d2 = np.sum((p - foot) ** 2, axis=1)
         k = int(np.argmin(d2))
         seg = int(idx[k])
-        self._last = seg
         t = self._tangents[seg]
         r = p - foot[k]
-        lateral = _offset(
-            float(t[0] * r[1] - t[1] * r[0]), float(d2[k]), float(u[k]), self._lengths_list[seg]
-        )
-        return Projection(float(self._s0[seg] + u[k]), lateral, seg, (float(t[0]), float(t[1])))
+        return seg, float(d2[k]), float(u[k]), float(t[0] * r[1] - t[1] * r[0])
 
     def restart_at(self, index: int) -> None:
         """Go on walking from segment ``index`` (as if the last answer had been there)."""
@@ -127,14 +126,25 @@ class PolylineProgress:
     def project_xy(self, px: float, py: float) -> tuple[float, float, int, float, float]:
         """:meth:`project` of one point on plain floats: (s, lateral, index, tx, ty).
 
-        The same answer bit for bit, without building a ``Projection`` (the
-        race control's per-step path).
+        The same station, segment and tangent, without building a
+        ``Projection`` (race control's per-step path). ``lateral`` is the
+        signed distance to the foot, + left [m]: the perpendicular offset
+        where the foot is inside the segment, else the distance to the
+        segment's end with the offset's sign (``Projection.lateral``'s
+        meaning, on plain floats).
         """
         i = self._last
-        if i is None:
-            proj = self.project((px, py))
-            return proj.s, proj.lateral, proj.index, proj.tangent[0], proj.tangent[1]
-        # The walk of ``_walk`` with ``_foot`` and ``_step`` inlined.
+        i, d2, u, offset = self._search(px, py) if i is None else self._walk(px, py, i)
+        self._last = i
+        tx, ty = self._tangents_list[i]
+        return self._s0_list[i] + u, _offset(offset, d2, u, self._lengths_list[i]), i, tx, ty
+
+    def _walk(self, px: float, py: float, i: int) -> tuple[int, float, float, float]:
+        """From segment i on to each neighbour while it is nearer: (segment,
+        distance^2, the foot's arc position u, perpendicular offset).
+
+        Plain floats, the segment's foot written out: it runs every physics step.
+        """
         segments = self._segments
         n = len(segments)
         closed = self.closed
@@ -158,44 +168,7 @@ class PolylineProgress:
                 if d2 >= best_d2:
                     break
                 i, best_d2, best_u, best_lat = j, d2, u, tx * fy - ty * fx
-        self._last = i
-        tx, ty = self._tangents_list[i]
-        lateral = _offset(best_lat, best_d2, best_u, self._lengths_list[i])
-        return self._s0_list[i] + best_u, lateral, i, tx, ty
-
-    def _foot(self, i: int, px: float, py: float) -> tuple[float, float, float]:
-        """Distance^2 to segment i, the foot's arc position u, and lateral offset."""
-        sx, sy = self._starts_list[i]
-        tx, ty = self._tangents_list[i]
-        rx, ry = px - sx, py - sy
-        u = min(max(rx * tx + ry * ty, 0.0), self._lengths_list[i])
-        fx, fy = rx - tx * u, ry - ty * u
-        return fx * fx + fy * fy, u, tx * fy - ty * fx
-
-    def _step(self, i: int, di: int) -> int | None:
-        j = i + di
-        n = len(self._starts_list)
-        if self.closed:
-            return j % n
-        return j if 0 <= j < n else None
-
-    def _walk(self, px: float, py: float, i: int) -> Projection:
-        best = self._foot(i, px, py)
-        for di in (1, -1):
-            while True:
-                j = self._step(i, di)
-                if j is None:
-                    break
-                cand = self._foot(j, px, py)
-                if cand[0] >= best[0]:
-                    break
-                i, best = j, cand
-        self._last = i
-        d2, u, lateral = best
-        t = self._tangents_list[i]
-        return Projection(
-            self._s0_list[i] + u, _offset(lateral, d2, u, self._lengths_list[i]), i, t
-        )
+        return i, best_d2, best_u, best_lat
 
 
 def _offset(lateral: float, d2: float, u: float, length: float) -> float:

@@ -28,7 +28,8 @@
   a quarter does not count), one it skips backwards is taken off (driving
   it again earns it back), and the excursion is an off-track event (FS
   charges 10 s per off-course).
-* The offset that decides off-track is the projection's (``Projection.lateral``):
+* The offset that decides off-track is the projection's lateral one
+  (``PolylineProgress.project_xy``, ``Projection.lateral``'s meaning):
   the perpendicular one, or beyond either end of an open centreline the
   distance to that end, so the car is not on a track that has ended.
 * Stuck: less than ``stuck_progress_m`` of net progress in ``stuck_time_s``.
@@ -43,6 +44,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
 from conesim.sim.progress import PolylineProgress, segment_crossing, segment_crossing_xy
 
@@ -144,7 +146,7 @@ class RaceControl:
         finish_line: NDArray[np.float64] | None = None,
     ) -> None:
         self.rules = rules or RaceRules()
-        self.progress = PolylineProgress(centreline, closed)
+        self.progress = PolylineProgress(Polyline(centreline, closed))
         self.half_widths = np.asarray(half_widths, dtype=float)
         self.line = np.asarray(start_finish, dtype=float).reshape(2, 2)
         self.finish = (
@@ -168,13 +170,13 @@ class RaceControl:
     def start(self, t: float, pose: Pose2D) -> None:
         """Initialise at the start pose; starts the clock if already past the line."""
         proj = self.progress.project(pose.xy)
-        self._s_last = proj.s
+        self._s_last = float(proj.station[0])
         self._history = deque([(t, 0.0)])
         self._searched_at = None
         line_mid = self.line.mean(axis=0)
         line_dir = self.line[1] - self.line[0]
         normal = np.array([-line_dir[1], line_dir[0]])
-        if np.dot(normal, proj.tangent) < 0:
+        if np.dot(normal, proj.tangent[0]) < 0:
             normal = -normal
         ahead = float(np.dot(pose.xy - line_mid, normal)) / float(np.linalg.norm(normal))
         if 0.0 <= ahead <= 0.5:
@@ -317,9 +319,8 @@ def line_crossings_along(
     polyline: NDArray[np.float64], closed: bool, line: NDArray[np.float64]
 ) -> list[float]:
     """Arc lengths [m] at which a polyline crosses a line segment, in order."""
-    pts = np.vstack([polyline, polyline[:1]]) if closed else np.asarray(polyline)
-    seg = np.hypot(*np.diff(pts, axis=0).T)
-    s0 = np.concatenate([[0.0], np.cumsum(seg)])
+    along = Polyline(polyline, closed)
+    pts, seg, s0 = along.ring, along.segment_lengths, along.stations
     out: list[float] = []
     for i in range(len(pts) - 1):
         u = segment_crossing(pts[i], pts[i + 1], line[0], line[1])

@@ -63,7 +63,8 @@ class TrackGeometry:
         direction: (2,) unit vector of driving at the start/finish line.
         length_m: length of the centreline [m] (a loop: one lap).
         closed: whether the centreline is a loop.
-        curvature: (m,) signed curvature of the centreline [1/m], left positive.
+        curvature: (m,) signed curvature of the centreline [1/m], left positive
+            (``Polyline.curvature``: the circle through each point and its neighbours).
         circles: skidpad only: the (right, left) circles, else None.
     """
 

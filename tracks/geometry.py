@@ -13,13 +13,13 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
 from conesim.tracks.derived import TrackGeometry
 from conesim.tracks.errors import TrackGeometryError
 from conesim.tracks.kinds import ConeKind, Layout
 from conesim.tracks.lanes import MIN_SIDE_CONES, lane_geometry
 from conesim.tracks.ordering import order_loop
-from conesim.tracks.polyline import cumulative_length
 from conesim.tracks.skidpad import find_circles, skidpad_geometry
 
 FloatArray = NDArray[np.float64]
@@ -79,7 +79,7 @@ def detect_layout(cones: FloatArray, kinds: tuple[ConeKind, ...]) -> Layout:
 def _has_open_gap(points: FloatArray) -> bool:
     tour = points[order_loop(points)]
     steps = np.hypot(*np.diff(np.vstack([tour, tour[:1]]), axis=0).T)
-    return bool(steps.max() > OPEN_GAP_FRACTION * float(cumulative_length(tour, True)[-1]))
+    return bool(steps.max() > OPEN_GAP_FRACTION * Polyline(tour, True).end_station)
 
 
 def derive_start_pose(cones: FloatArray, kinds: tuple[ConeKind, ...], layout: Layout) -> Pose2D:

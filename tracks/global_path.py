@@ -14,6 +14,7 @@ import math
 import os
 import uuid
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -26,9 +27,9 @@ from conesim.core.geodesy import (
     gps_to_local_cartesian,
     local_cartesian_to_gps,
 )
+from conesim.core.polyline import Polyline
 from conesim.tracks.errors import TrackFormatError
 from conesim.tracks.model import Track
-from conesim.tracks.polyline import resample
 
 COV_THRESHOLD_M2 = 0.0025  # [m^2] seed: "error > threshold, e.g. >5 cm if threshold=0.0025"
 DERIVED_PATH_COV_M2 = 0.0004  # [m^2] a path surveyed from the cones: 2 cm sigma
@@ -101,20 +102,11 @@ class GlobalPath:
         """(n,) the ROS pipeline's colour per point: ``"red"`` or ``"green"``."""
         return ["red" if high else "green" for high in self.high_covariance]
 
-    @property
-    def segments(self) -> tuple[FloatArray, FloatArray]:
-        """Segment start points and direction vectors, (k, 2) each [m].
-
-        A closed path includes the segment from the last point to the first.
-        """
-        pts = np.vstack([self.xy, self.xy[:1]]) if self.closed else self.xy
-        return pts[:-1], np.diff(pts, axis=0)
-
-    @property
-    def length_m(self) -> float:
-        """Total length along the path [m]."""
-        _, d = self.segments
-        return float(np.hypot(d[:, 0], d[:, 1]).sum())
+    @cached_property
+    def polyline(self) -> Polyline:
+        """The path's points as a polyline (a closed path's includes the
+        segment from the last point back to the first)."""
+        return Polyline(self.xy, self.closed)
 
 
 def global_path_from_geodetic(
@@ -321,8 +313,9 @@ def global_path_findings(track: Track, path: GlobalPath) -> tuple[list[str], lis
     if track.global_path_file is not None:
         path_name = f"global path {track.global_path_file.name}"
     fine = DENSE_SPACING_M
-    off_d, _ = cKDTree(resample(centre, track.layout == "closed", fine)).query(path.xy)
-    covered, _ = cKDTree(resample(path.xy, path.closed, fine)).query(centre)
+    dense_centre = Polyline(centre, track.layout == "closed").resample(fine).points
+    off_d, _ = cKDTree(dense_centre).query(path.xy)
+    covered, _ = cKDTree(path.polyline.resample(fine).points).query(centre)
     warnings: list[str] = []
     errors: list[str] = []
     off = off_d > limit

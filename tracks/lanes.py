@@ -22,21 +22,13 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
 from conesim.tracks.derived import TrackGeometry
 from conesim.tracks.errors import TrackGeometryError
 from conesim.tracks.kinds import ConeKind
 from conesim.tracks.midline import Midline, centreline_between
 from conesim.tracks.ordering import order_loop, order_path
-from conesim.tracks.polyline import (
-    cumulative_length,
-    curvature,
-    interpolate_at,
-    project,
-    resample,
-    signed_area,
-    tangents,
-)
 from conesim.tracks.timing import TimingLine, big_orange_lines, perpendicular_line
 
 FloatArray = NDArray[np.float64]
@@ -95,7 +87,7 @@ def align_to(other: FloatArray, reference: FloatArray, closed: bool) -> FloatArr
     """``other`` ordered the same way round as ``reference`` and, for a loop,
     starting at its cone nearest to ``reference[0]``."""
     if closed:
-        if np.sign(signed_area(other)) != np.sign(signed_area(reference)):
+        if np.sign(Polyline(other).signed_area()) != np.sign(Polyline(reference).signed_area()):
             other = other[::-1]
         first = int(np.argmin(np.hypot(*(other - reference[0]).T)))
         return np.roll(other, -first, axis=0)
@@ -107,9 +99,9 @@ def align_to(other: FloatArray, reference: FloatArray, closed: bool) -> FloatArr
 def orient_like(points: FloatArray, mid: Midline) -> FloatArray:
     """Ordered boundary cones turned to run in the direction of ``mid``."""
     if mid.closed:
-        same = np.sign(signed_area(points)) == np.sign(signed_area(mid.centre))
+        same = np.sign(Polyline(points).signed_area()) == np.sign(mid.line.signed_area())
         return points if same else points[::-1]
-    s, _, _ = project(mid.centre, False, points[[0, -1]])
+    s = mid.line.project(points[[0, -1]]).station
     return points if s[0] <= s[1] else points[::-1]
 
 
@@ -120,9 +112,9 @@ def driving_reversed(mid: Midline, start_pose: Pose2D | None, blue: FloatArray) 
     stands. Without: most blue cones on the right of ``mid``.
     """
     if start_pose is None:
-        _, lateral, _ = project(mid.centre, mid.closed, blue)
+        lateral = mid.line.project(blue).lateral
         return bool(np.sum(np.sign(lateral)) < 0)
-    s, _, _ = project(mid.centre, mid.closed, start_pose.xy[None])
+    s = mid.line.project(start_pose.xy).station
     ahead = _point_at(mid, s[0] + 0.25) - _point_at(mid, s[0] - 0.25)
     heading = np.array([np.cos(start_pose.yaw), np.sin(start_pose.yaw)])
     return bool(np.dot(ahead, heading) < 0)
@@ -135,9 +127,8 @@ def assign_sides(orange: FloatArray, mid: Midline) -> tuple[FloatArray, FloatArr
     beyond the ends of a lane) is within ``SIDE_TOLERANCE`` of the local
     half-width, measured where the centreline ends for cones beyond it.
     """
-    _, lateral, _ = project(mid.centre, mid.closed, orange, extend_ends=not mid.closed)
-    _, _, foot = project(mid.centre, mid.closed, orange)
-    dl, dr = mid.half_widths(foot)
+    lateral = mid.line.project(orange, extend_ends=not mid.closed).lateral
+    dl, dr = mid.half_widths(mid.line.project(orange).foot)
     half = np.where(lateral > 0, dl, dr)
     near = np.abs(np.abs(lateral) - half) <= np.maximum(SIDE_TOLERANCE * half, 0.5)
     return orange[near & (lateral > 0)], orange[near & (lateral <= 0)]
@@ -148,22 +139,21 @@ def _timing_lines(big: FloatArray, mid: Midline, start_pose: Pose2D | None) -> l
     if mid.closed:
         if start_pose is None:
             return lines[:1] or [perpendicular_line(mid, 0.0)]
-        s_start = float(project(mid.centre, True, start_pose.xy[None])[0][0])
+        s_start = float(mid.line.project(start_pose.xy).station[0])
         if not lines:
             return [perpendicular_line(mid, s_start)]
-        total = float(cumulative_length(mid.centre, True)[-1])
+        total = mid.line.end_station
         ahead = [((line.s - s_start) % total, line) for line in lines]
         return [min(ahead, key=lambda pair: min(pair[0], total - pair[0]))[1]]
     if not lines:
         s0 = 0.0
         if start_pose is not None:
-            s0 = float(project(mid.centre, False, start_pose.xy[None])[0][0])
+            s0 = float(mid.line.project(start_pose.xy).station[0])
         lines = [perpendicular_line(mid, s0)]
     if len(lines) == 1:
         # No finish line of big orange cones: the run ends at the lane's end
         # (the validator warns), not never.
-        total = float(cumulative_length(mid.centre, False)[-1])
-        end = perpendicular_line(mid, total - LANE_END_FINISH_M)
+        end = perpendicular_line(mid, mid.line.end_station - LANE_END_FINISH_M)
         if end.s > lines[0].s:
             lines.append(end)
     return lines
@@ -174,7 +164,8 @@ def _finish(
 ) -> TrackGeometry:
     closed = mid.closed
     start_s = lines[0].s if closed else 0.0
-    centreline = resample(mid.centre, closed, CENTRELINE_SPACING, start_s=start_s)
+    line = mid.line.resample(CENTRELINE_SPACING, start=start_s)
+    centreline = line.points
     if len(centreline) < 3:
         raise TrackGeometryError("the centreline is shorter than 1 m")
     dl, dr = mid.half_widths(centreline)
@@ -182,7 +173,7 @@ def _finish(
         start_point = lines[0].ends.mean(axis=0)
         left = _roll_to(left, start_point)
         right = _roll_to(right, start_point)
-        direction = tangents(centreline, True)[0]
+        direction = line.tangents()[0]
     else:
         direction = _unit(_point_at(mid, lines[0].s + 0.25) - _point_at(mid, lines[0].s - 0.25))
     return TrackGeometry(
@@ -192,14 +183,14 @@ def _finish(
         right_boundary=np.array(right, dtype=float),
         timing_lines=tuple(np.array(line.ends, dtype=float) for line in lines),
         direction=direction,
-        length_m=float(cumulative_length(mid.centre, closed)[-1]),
+        length_m=mid.line.end_station,
         closed=closed,
-        curvature=curvature(centreline, closed),
+        curvature=line.curvature(),
     )
 
 
 def _point_at(mid: Midline, s: float) -> FloatArray:
-    return interpolate_at(mid.centre, mid.closed, np.array([s]))[0]
+    return mid.line.at([s])[0]
 
 
 def _roll_to(points: FloatArray, target: FloatArray) -> FloatArray:

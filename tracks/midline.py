@@ -19,13 +19,15 @@ Steps (``centreline_between``):
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from conesim.core.polyline import Polyline
 from conesim.tracks.errors import TrackGeometryError
-from conesim.tracks.polyline import cumulative_length, spline_curve
+from conesim.tracks.spline import spline_curve
 
 FloatArray = NDArray[np.float64]
 
@@ -52,6 +54,11 @@ class Midline:
     right: FloatArray
     closed: bool
 
+    @cached_property
+    def line(self) -> Polyline:
+        """The dense centreline as a polyline."""
+        return Polyline(self.centre, self.closed)
+
     def half_widths(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Distances from ``points`` (n, 2) to the left and right curves [m]."""
         dl, _ = cKDTree(self.left).query(points)
@@ -75,7 +82,7 @@ def centreline_between(left: FloatArray, right: FloatArray, closed: bool) -> Mid
     right_curve = spline_curve(right, closed, DENSE_STEP)
     points, keys = midpoints(left_curve, right_curve, closed)
     approx_len = 0.5 * (
-        cumulative_length(left_curve, closed)[-1] + cumulative_length(right_curve, closed)[-1]
+        Polyline(left_curve, closed).end_station + Polyline(right_curve, closed).end_station
     )
     bins = order_midpoints(points, keys, approx_len)
     if len(bins) < 4:
@@ -151,6 +158,6 @@ def extend_to_ends(bins: FloatArray, start: FloatArray, end: FloatArray) -> Floa
 
 
 def _progress(curve: FloatArray, closed: bool) -> FloatArray:
-    cum = cumulative_length(curve, closed)
+    cum = Polyline(curve, closed).stations
     total = max(float(cum[-1]), 1e-12)
     return cum[: len(curve)] / total

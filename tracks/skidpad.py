@@ -35,11 +35,11 @@ from numpy.typing import NDArray
 from scipy.cluster.vq import kmeans2
 from scipy.optimize import least_squares
 
+from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
 from conesim.tracks.derived import SkidpadCircle, TrackGeometry
 from conesim.tracks.errors import TrackGeometryError
 from conesim.tracks.kinds import ConeKind
-from conesim.tracks.polyline import cumulative_length, curvature, resample, tangents
 
 FloatArray = NDArray[np.float64]
 
@@ -188,11 +188,13 @@ def skidpad_geometry(
     section = np.concatenate(
         [np.zeros(len(entry)), np.ones(len(loop_r)), np.full(len(loop_l), 2), np.zeros(len(leave))]
     )
-    centreline = resample(dense, False, CENTRELINE_SPACING)
-    cum = cumulative_length(dense, False)
-    nearest = np.clip(np.searchsorted(cum, cumulative_length(centreline, False)), 0, len(dense) - 1)
+    dense_line = Polyline(dense)
+    centre = dense_line.resample(CENTRELINE_SPACING)
+    centreline = centre.points
+    cum = dense_line.stations
+    nearest = np.clip(np.searchsorted(cum, centre.stations), 0, len(dense) - 1)
     widths = np.choose(section[nearest].astype(int), [lane_width, right.width, left.width])
-    side = np.array([[-t[1], t[0]] for t in tangents(centreline, False)])
+    side = np.array([[-t[1], t[0]] for t in centre.tangents()])
     half = 0.5 * widths[:, None]
     line = _timing_line(cones[kind == ConeKind.BIG_ORANGE], frame, lane_width)
     return TrackGeometry(
@@ -204,7 +206,7 @@ def skidpad_geometry(
         direction=frame.ahead,
         length_m=float(cum[-1]),
         closed=False,
-        curvature=curvature(centreline, False),
+        curvature=centre.curvature(),
         circles=(right, left),
     )
 

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from conesim.core.polyline import Polyline
 from conesim.tracks.midline import Midline
-from conesim.tracks.polyline import cumulative_length, interpolate_at, project, tangents
 
 FloatArray = NDArray[np.float64]
 
@@ -46,13 +46,14 @@ def big_orange_lines(big: FloatArray, mid: Midline) -> list[TimingLine]:
     """
     if len(big) == 0:
         return []
-    s, lateral, _ = project(mid.centre, mid.closed, big, extend_ends=not mid.closed)
+    proj = mid.line.project(big, extend_ends=not mid.closed)
+    s, lateral = proj.station, proj.lateral
     lines = []
-    for members in _clusters(s, float(cumulative_length(mid.centre, mid.closed)[-1]), mid.closed):
+    for members in _clusters(s, mid.line.end_station, mid.closed):
         left, right = big[members][lateral[members] > 0], big[members][lateral[members] <= 0]
         if len(left) and len(right):
             ends = np.vstack([left.mean(axis=0), right.mean(axis=0)])
-            centre_s, _, _ = project(mid.centre, mid.closed, ends.mean(axis=0, keepdims=True))
+            centre_s = mid.line.project(ends.mean(axis=0)).station
             lines.append(TimingLine(float(centre_s[0]), ends))
         else:
             lines.append(perpendicular_line(mid, _circular_mean(s[members], mid)))
@@ -61,12 +62,11 @@ def big_orange_lines(big: FloatArray, mid: Midline) -> list[TimingLine]:
 
 def perpendicular_line(mid: Midline, s: float) -> TimingLine:
     """The line across the track perpendicular to the centreline at arc length ``s`` [m]."""
-    total = float(cumulative_length(mid.centre, mid.closed)[-1])
+    line = mid.line
+    total = line.end_station
     s = s % total if mid.closed else min(max(s, 0.0), total)
-    point = interpolate_at(mid.centre, mid.closed, np.array([s]))
-    ahead = interpolate_at(mid.centre, mid.closed, np.array([s + 0.05]))
-    behind = interpolate_at(mid.centre, mid.closed, np.array([s - 0.05]))
-    tangent = tangents(np.vstack([behind, point, ahead]), closed=False)[1]
+    point = line.at([s])
+    tangent = Polyline(line.at([s - 0.05, s, s + 0.05])).tangents()[1]
     normal = np.array([-tangent[1], tangent[0]])
     dl, dr = mid.half_widths(point)
     ends = np.vstack([point[0] + normal * dl[0], point[0] - normal * dr[0]])
@@ -88,6 +88,6 @@ def _clusters(s: FloatArray, total: float, closed: bool) -> list[NDArray[np.intp
 def _circular_mean(s: FloatArray, mid: Midline) -> float:
     if not mid.closed:
         return float(np.mean(s))
-    total = float(cumulative_length(mid.centre, True)[-1])
+    total = mid.line.end_station
     angle = np.angle(np.mean(np.exp(2j * np.pi * s / total)))
     return float(angle / (2 * np.pi) * total) % total

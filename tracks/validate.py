@@ -34,13 +34,13 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.ndimage import uniform_filter1d
 
+from conesim.core.polyline import Polyline
 from conesim.tracks.derived import TrackGeometry
 from conesim.tracks.errors import TrackFormatError
 from conesim.tracks.global_path import global_path_findings, global_path_for_track
 from conesim.tracks.kinds import ConeKind, Layout
 from conesim.tracks.lanes import LANE_END_FINISH_M, MIN_SIDE_CONES
 from conesim.tracks.model import Track
-from conesim.tracks.polyline import project, ring, segment_crossings
 
 FloatArray = NDArray[np.float64]
 
@@ -176,7 +176,7 @@ def _check_width(geometry: TrackGeometry, report: ValidationReport) -> None:
 
 def _check_spacing(geometry: TrackGeometry, report: ValidationReport) -> None:
     for side, cones in (("left", geometry.left_boundary), ("right", geometry.right_boundary)):
-        pts = ring(cones, geometry.closed)
+        pts = Polyline(cones, geometry.closed).ring
         gaps = np.hypot(*np.diff(pts, axis=0).T)
         wide = gaps > MAX_CONE_SPACING_M + 1e-6
         if wide.any():
@@ -206,7 +206,7 @@ def _check_timing_cones(track: Track, geometry: TrackGeometry, report: Validatio
         )
         return
     start, finish = (line.mean(axis=0) for line in (geometry.start_finish, geometry.finish_line))
-    s, _, _ = project(geometry.centreline, False, np.vstack([start, finish]))
+    s = Polyline(geometry.centreline).project(np.vstack([start, finish])).station
     timed = float(s[1] - s[0])
     if abs(timed - ACCELERATION_LENGTH_M) > ACCELERATION_TOLERANCE_M:
         report.warnings.append(
@@ -217,7 +217,7 @@ def _check_timing_cones(track: Track, geometry: TrackGeometry, report: Validatio
 
 def _near_line(points: FloatArray, line: FloatArray, within: float = 1.0) -> int:
     """How many points lie within ``within`` [m] of the segment ``line`` (2, 2)."""
-    _, _, foot = project(line, False, points)
+    foot = Polyline(line).project(points).foot
     return int(np.count_nonzero(np.hypot(*(points - foot).T) <= within))
 
 
@@ -313,20 +313,24 @@ def _check_skidpad(geometry: TrackGeometry, report: ValidationReport) -> None:
 
 def _check_crossings(geometry: TrackGeometry, report: ValidationReport) -> None:
     closed = geometry.closed
-    left, right, centre = geometry.left_boundary, geometry.right_boundary, geometry.centreline
+    left, right, centre = (
+        Polyline(points, closed)
+        for points in (geometry.left_boundary, geometry.right_boundary, geometry.centreline)
+    )
     for what, found, where in (
-        ("left boundary crosses itself", segment_crossings(left, closed), left),
-        ("right boundary crosses itself", segment_crossings(right, closed), right),
-        ("left and right boundaries cross", segment_crossings(left, closed, right, closed), left),
-        ("centreline crosses itself", segment_crossings(centre, closed), centre),
+        ("left boundary crosses itself", left.crossings(), left),
+        ("right boundary crosses itself", right.crossings(), right),
+        ("left and right boundaries cross", left.crossings(right), left),
+        ("centreline crosses itself", centre.crossings(), centre),
     ):
         if found:
-            x, y = where[found[0][0]]
+            x, y = where.points[found[0][0]]
             report.errors.append(f"{what} ({len(found)} crossings, first near ({x:.1f}, {y:.1f}))")
 
 
 def _check_colours(track: Track, geometry: TrackGeometry, report: ValidationReport) -> None:
-    _, lateral, _ = project(geometry.centreline, geometry.closed, track.cones_of(ConeKind.BLUE))
+    centre = Polyline(geometry.centreline, geometry.closed)
+    lateral = centre.project(track.cones_of(ConeKind.BLUE)).lateral
     if np.mean(lateral < 0) > 0.5:
         report.errors.append(
             "most blue cones lie on the right of the driving direction: the start pose faces "
@@ -336,7 +340,7 @@ def _check_colours(track: Track, geometry: TrackGeometry, report: ValidationRepo
 
 def _check_start_pose(track: Track, geometry: TrackGeometry, report: ValidationReport) -> None:
     pose = track.start_pose
-    _, _, foot = project(geometry.centreline, geometry.closed, pose.xy[None])
+    foot = Polyline(geometry.centreline, geometry.closed).project(pose.xy).foot
     i = int(np.argmin(np.hypot(*(geometry.centreline - foot[0]).T)))
     off = float(np.hypot(*(pose.xy - foot[0])))
     if off > 0.5 * geometry.widths[i]:

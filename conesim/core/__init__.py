@@ -4,6 +4,9 @@
   ROS messages, reduced to 2D), and the frame names.
 - ``pose``: ``Pose2D`` and ``wrap_angle``.
 - ``geodesy``: the reference origin and the ROS pipeline's GPS-to-local projection.
+- ``polyline``: ``Polyline``, the one line type (stations, resampling,
+  projection, curvature, crossings) of tracks, race control, the planner
+  and the lap-time limit; ``projection``: ``Projection``, every projector's answer.
 - ``compiled``: numba's ``njit`` with the on-disk cache the kernels share.
 
 These modules import nothing else of conesim, as every ROS node shares

@@ -9,7 +9,7 @@ from numpy.testing import assert_allclose
 
 from conesim.envs.limit_lap import (
     _top_speed,
-    centreline_curvature,
+    centreline_grid,
     limit_lap_time,
     qss_speed_profile,
 )
@@ -25,8 +25,8 @@ def circle(radius: float, n: int = 400) -> np.ndarray:
 
 
 def test_curvature_of_a_circle_is_one_over_r() -> None:
-    """The interpolating spline's curvature on a 400-gon of R = 20 m is 1/R to 1e-4."""
-    _, kappa = centreline_curvature(circle(20.0), closed=True)
+    """The curvature along the spline through a 400-gon of R = 20 m is 1/R to 1e-4."""
+    _, kappa = centreline_grid(circle(20.0), closed=True)
     assert_allclose(kappa, 1 / 20.0, rtol=1e-4)
 
 

@@ -121,7 +121,7 @@ def test_station_hint_picks_the_current_pass(synth: ModuleType) -> None:
     loop = loop[np.hypot(loop[:, 0] - 20.0, loop[:, 1]) > 0.3]  # leave out the joint
     second = np.column_stack([np.arange(20.0, 40.0, 0.5), np.zeros(40)])
     path = global_path_from_centreline(np.vstack([first, loop, second]), closed=False)
-    projector = PathProjector(path)
+    projector = PathProjector(path.polyline)
     cones = np.array([[25.0, 1.5], [25.0, -1.5], [30.0, 1.5], [30.0, -1.5]])
     pose = Pose2D(22.0, 0.0, 0.0)
     scene = synth.make_scene(

@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numpy.testing import assert_allclose
 
-from conesim.planner.geometry import PathProjector, crosses_boundary, resample_polyline
+from conesim.planner.geometry import PathProjector, crosses_boundary
 from conesim.tracks.global_path import global_path_from_centreline
 from tests.planner.kernels.geometry_reference import axis_difference, window_mask
 
@@ -27,7 +27,7 @@ def brute_force(points: np.ndarray, xy: np.ndarray, closed: bool, allowed=None) 
 def test_seed_projection_on_one_segment() -> None:
     """The ROS pipeline's rule on (0,0)->(10,0): foot, station, signed offset, side, 1e-8 m."""
     path = global_path_from_centreline([[0.0, 0.0], [10.0, 0.0]], closed=False)
-    proj = PathProjector(path).project(np.array([[4.0, 2.0], [4.0, -1.0], [12.0, 1.0]]))
+    proj = PathProjector(path.polyline).project(np.array([[4.0, 2.0], [4.0, -1.0], [12.0, 1.0]]))
     assert_allclose(proj.foot, [[4.0, 0.0], [4.0, 0.0], [10.0, 0.0]], atol=1e-8)
     assert_allclose(proj.station, [4.0, 4.0, 10.0], atol=1e-8)
     # + left; beyond the end the offset is still the distance from the segment's line.
@@ -42,7 +42,7 @@ def test_projection_is_the_exact_nearest_segment() -> None:
     s = np.linspace(0.0, 2 * math.pi, 400, endpoint=False)
     xy = np.column_stack([30 * np.cos(s) + 3 * np.cos(7 * s), 20 * np.sin(s)])
     path = global_path_from_centreline(xy, closed=True)
-    projector = PathProjector(path)
+    projector = PathProjector(path.polyline)
     points = xy[rng.integers(0, 400, 300)] + rng.normal(0.0, 4.0, (300, 2))
     proj = projector.project(points)
     assert_allclose(proj.distance, brute_force(points, path.xy, True), atol=1e-9)
@@ -55,14 +55,14 @@ def test_windowed_projection_is_the_nearest_segment_in_the_window() -> None:
     s = np.linspace(0.0, 2 * math.pi, 400, endpoint=False)
     xy = np.column_stack([30 * np.cos(s), 20 * np.sin(s)])
     path = global_path_from_centreline(xy, closed=True)
-    projector = PathProjector(path)
+    projector = PathProjector(path.polyline)
     points = rng.uniform(-35.0, 35.0, (200, 2))
     lo, hi = projector.length - 20.0, projector.length + 30.0  # wraps past the start
     allowed = window_mask(projector, lo, hi)
     proj = projector.project(points, (lo, hi))
     assert_allclose(proj.distance, brute_force(points, path.xy, True, allowed), atol=1e-9)
     ahead = axis_difference(projector.axis, proj.station, 0.5 * (lo + hi))
-    longest = float(np.max(np.hypot(*path.segments[1].T)))  # a segment overlapping an edge
+    longest = float(np.max(path.polyline.segment_lengths))  # a segment overlapping an edge
     assert np.all(np.abs(ahead) <= 25.0 + longest)
 
 
@@ -83,14 +83,3 @@ def test_crossing_the_boundary() -> None:
         assert crosses_boundary(np.array(path), boundary) is expected, path
     assert not crosses_boundary(np.array([[1.0, 1.0]]), boundary)
     assert not crosses_boundary(np.array([[0.0, 0.0], [2.0, 2.0]]), np.zeros((0, 2, 2)))
-
-
-def test_resample_polyline_every_half_metre() -> None:
-    """An L of 3 m + 1.2 m gives points every 0.5 m of arc length, the end included."""
-    line = np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 1.2]])
-    out = resample_polyline(line, 0.5)
-    steps = np.hypot(*np.diff(out, axis=0).T)
-    assert len(out) == 10  # 0, 0.5, ..., 4.0 and the end at 4.2
-    assert_allclose(out[6], [3.0, 0.0])
-    assert_allclose(out[-1], [3.0, 1.2])
-    assert_allclose(steps[:-1][steps[:-1] > 0.49], 0.5)

@@ -16,6 +16,7 @@ from numpy.testing import assert_allclose
 from scipy.interpolate import splev, splprep
 
 from conesim.core.messages import ConeDetections, Header
+from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
 from conesim.localization.frames import Buffer
 from conesim.planner import (
@@ -29,7 +30,6 @@ from conesim.planner import (
     classify_cones_by_side,
     reference_path_planning,
 )
-from conesim.planner.geometry import resample_polyline
 from conesim.planner.spline import fit_path
 
 
@@ -333,7 +333,7 @@ def test_fitpack_flag_falls_back_to_straight_lines(monkeypatch: pytest.MonkeyPat
     monkeypatch.setattr(conesim.planner.spline, "splprep", flagged)
     x = np.linspace(0.0, 12.0, 7)
     mids = np.column_stack([x, 2.0 * np.sin(x / 4.0)])
-    assert_allclose(fit_path(mids, MidlineConfig()), resample_polyline(mids, 0.5))
+    assert_allclose(fit_path(mids, MidlineConfig()), Polyline(mids).sample_every(0.5).points)
 
 
 def test_outputs_match_the_seed_topics(synth: ModuleType, circle) -> None:

@@ -16,6 +16,7 @@ from scipy.interpolate import BSpline, splev, splprep
 from scipy.spatial import Delaunay
 
 from conesim.core.messages import Header
+from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
 from conesim.localization.frames import Buffer, TransformStamped
 from conesim.planner import MidlineConfig, SpeedProfileConfig, kernels
@@ -32,7 +33,7 @@ def loop_path(closed: bool = True) -> PathProjector:
     """A wobbly loop (or its open version) of 400 points."""
     s = np.linspace(0.0, 2 * math.pi, 400, endpoint=False)
     xy = np.column_stack([30 * np.cos(s) + 3 * np.cos(7 * s), 20 * np.sin(s)])
-    return PathProjector(global_path_from_centreline(xy, closed=closed))
+    return PathProjector(global_path_from_centreline(xy, closed=closed).polyline)
 
 
 @pytest.mark.parametrize("closed", [True, False])
@@ -141,12 +142,11 @@ def test_median_is_numpy_median() -> None:
 
 
 def test_arc_length_small_and_random() -> None:
-    """The cumulative sum of step lengths, [0] for no or one point."""
+    """``Polyline.stations`` bit for bit, [0] for no or one point."""
     assert arc_length(np.zeros((0, 2))).tolist() == [0.0]
     assert arc_length(np.ones((1, 2))).tolist() == [0.0]
     points = np.random.default_rng(5).normal(0.0, 3.0, (50, 2))
-    expected = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(points, axis=0).T))])
-    assert_array_equal(arc_length(points), expected)
+    assert_array_equal(arc_length(points), Polyline(points).stations)
 
 
 def test_cone_set_select() -> None:
@@ -240,28 +240,17 @@ def test_chain_nearest_is_the_reference_walk() -> None:
         assert got == reference_chain(mid, station, first, axis, config)
 
 
-def reference_menger(points: np.ndarray) -> np.ndarray:
-    """Menger curvature as first written."""
-    n = len(points)
-    if n < 3:
-        return np.zeros(n)
-    a, b, c = points[:-2], points[1:-1], points[2:]
-    ab, bc, ac = b - a, c - b, c - a
-    cross = ab[:, 0] * bc[:, 1] - ab[:, 1] * bc[:, 0]
-    denom = np.hypot(*ab.T) * np.hypot(*bc.T) * np.hypot(*ac.T)
-    inner = np.divide(2.0 * cross, denom, out=np.zeros(n - 2), where=denom > 0.0)
-    return np.concatenate([inner[:1], inner, inner[-1:]])
-
-
 def test_menger_curvature_and_known_arc_length() -> None:
-    """Curvature with shared steps, repeated points included; the profile given its s."""
+    """The profile's pointwise curvature is ``Polyline.curvature`` bit for bit,
+    repeated points included; the profile given its s."""
     rng = np.random.default_rng(9)
     for n in (0, 1, 2, 3, 10, 60):
         points = np.cumsum(rng.normal(0.0, 0.5, (n, 2)), axis=0)
         if n > 4:
             points[3] = points[2]  # a zero step: no curvature there
         pointwise = SpeedProfileConfig(curvature_window=0.0)
-        assert_array_equal(profile_curvature(points, pointwise), reference_menger(points))
+        expected = Polyline(points).curvature() if n else np.zeros(0)
+        assert_array_equal(profile_curvature(points, pointwise), expected)
         assert_array_equal(speed_profile(points, s=arc_length(points)), speed_profile(points))
 
 

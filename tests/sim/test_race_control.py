@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
+from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
 from conesim.sim.progress import PolylineProgress, segment_crossing
 from conesim.sim.race_control import RaceControl, RaceRules
@@ -105,8 +106,8 @@ def test_projection_window_follows_a_figure_eight() -> None:
     """On a figure eight the projection stays on the branch being driven."""
     t = np.linspace(0, 2 * math.pi, 400, endpoint=False)
     eight = np.column_stack([10 * np.sin(t), 10 * np.sin(t) * np.cos(t)])
-    prog = PolylineProgress(eight, closed=True, window_m=5.0)
-    s_values = [prog.project(p).s for p in eight[3::5]]  # start off the crossing
+    prog = PolylineProgress(Polyline(eight, True), window_m=5.0)
+    s_values = [prog.project(p).station[0] for p in eight[3::5]]  # start off the crossing
     assert np.all(np.diff(s_values) > 0)
 
 
@@ -116,9 +117,9 @@ def test_projecting_anew_leaves_the_walk_where_it_was() -> None:
     changes none of the walk's answers."""
     t = np.linspace(0, 2 * math.pi, 400, endpoint=False)
     eight = np.column_stack([10 * np.sin(t), 10 * np.sin(t) * np.cos(t)])
-    plain = PolylineProgress(eight, closed=True, window_m=5.0)
-    looked = PolylineProgress(eight, closed=True, window_m=5.0)
-    far = PolylineProgress(eight, closed=True, window_m=5.0).project_xy(-9.0, -2.0)
+    plain = PolylineProgress(Polyline(eight, True), window_m=5.0)
+    looked = PolylineProgress(Polyline(eight, True), window_m=5.0)
+    far = PolylineProgress(Polyline(eight, True), window_m=5.0).project_xy(-9.0, -2.0)
     for p in eight[3::5]:
         assert looked.project_xy_anew(-9.0, -2.0) == far  # as a fresh search finds it
         assert looked.project_xy(*p) == plain.project_xy(*p)
@@ -247,10 +248,10 @@ def test_lateral_is_the_distance_to_the_foot_point() -> None:
     the end, is 5 m from it (3-4-5), with the side's sign; (-3, -4) is -5 m."""
     line = np.column_stack([np.arange(0.0, 10.5, 0.5), np.zeros(21)])
     for point, lateral in (((5.0, 2.0), 2.0), ((13.0, 4.0), 5.0), ((-3.0, -4.0), -5.0)):
-        walked, fresh = PolylineProgress(line, closed=False), PolylineProgress(line, closed=False)
+        walked, fresh = PolylineProgress(Polyline(line)), PolylineProgress(Polyline(line))
         walked.project((5.0, 0.0))  # the next query walks
         assert walked.project_xy(*point)[1] == pytest.approx(lateral, abs=1e-12)
-        assert fresh.project(point).lateral == pytest.approx(lateral, abs=1e-12)
+        assert fresh.project(point).lateral[0] == pytest.approx(lateral, abs=1e-12)
 
 
 def test_segment_crossing_fraction() -> None:

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from conesim.core.messages import ConeDetections, Header
+from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
 from conesim.envs.observation import SensorMemory, build_observation
 from conesim.sim.progress import PolylineProgress
@@ -25,17 +26,22 @@ def _wiggle(n: int, rng: np.random.Generator) -> np.ndarray:
 
 
 def test_project_xy_is_project() -> None:
+    """``project_xy`` answers ``project``'s station, segment and tangent bit for bit,
+    and its lateral offset to rounding, walking a circle and off an open arc's end."""
     rng = np.random.default_rng(4)
     theta = np.linspace(0.0, 2 * math.pi, 80, endpoint=False)
     circle = 20.0 * np.column_stack([np.cos(theta), np.sin(theta)])
     for points, closed in ((circle, True), (circle[:50], False)):
-        a, b = PolylineProgress(points, closed), PolylineProgress(points, closed)
+        line = Polyline(points, closed)
+        a, b = PolylineProgress(line), PolylineProgress(line)
         path = 20.0 * np.column_stack([np.cos(theta), np.sin(theta)])
         path = np.vstack([path, _wiggle(200, rng) + path[-1]])
         for x, y in path:
             proj = a.project((float(x), float(y)))
             got = b.project_xy(float(x), float(y))
-            assert got == (proj.s, proj.lateral, proj.index, *proj.tangent)
+            s, lateral, index, tx, ty = got
+            assert (s, index, tx, ty) == (proj.station[0], proj.segment[0], *proj.tangent[0])
+            assert lateral == pytest.approx(proj.lateral[0], abs=1e-12)
 
 
 def test_world_state_and_truth_match_the_vehicle_state() -> None:

@@ -41,7 +41,7 @@ def test_csv_round_trip_reproduces_points(tmp_path: Path) -> None:
     assert_allclose(back.xy, xy, atol=1e-6)
     assert_allclose(back.cov, cov)
     assert back.closed
-    assert_allclose(back.length_m, 100 * 2 * 20 * np.sin(np.pi / 100), rtol=1e-9)
+    assert_allclose(back.polyline.length, 100 * 2 * 20 * np.sin(np.pi / 100), rtol=1e-9)
 
 
 def test_status_is_red_above_seed_threshold(tmp_path: Path) -> None:

@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conesim.core.polyline import Polyline
 from conesim.tracks import DEFAULT_TRACK, ConeKind, Layout, check_report, load_track, shipped_tracks
 from conesim.tracks.global_path import COV_THRESHOLD_M2, read_global_path_csv
-from conesim.tracks.polyline import project
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -95,7 +95,7 @@ def test_global_path_follows_the_centreline(name: str) -> None:
     track = load_track(name)
     assert track.global_path_file is not None and track.global_path_file.is_file()
     path = read_global_path_csv(track.global_path_file)
-    _, lateral, _ = project(track.centreline, track.geometry.closed, path.xy)
+    lateral = Polyline(track.centreline, track.geometry.closed).project(path.xy).lateral
     assert np.abs(lateral).max() < 1e-6
     assert path.cov.min() < COV_THRESHOLD_M2 < path.cov.max()
     assert 0.05 < path.high_covariance.mean() < 0.5

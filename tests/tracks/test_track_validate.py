@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
+from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
 from conesim.tracks import ConeKind, Layout, Track, check_report, validate_track
-from conesim.tracks.polyline import segment_crossings
 
 
 def only(messages: list[str], fragment: str) -> str:
@@ -115,9 +115,10 @@ def test_self_crossing_polyline() -> None:
     """A bow tie crosses itself once; a square does not."""
     bow = np.array([[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]])
     square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
-    assert segment_crossings(bow, True) == [(0, 2)]
-    assert segment_crossings(square, True) == []
-    assert segment_crossings(square, True, square + np.array([0.5, 0.5]), True) == [(1, 0), (2, 3)]
+    assert Polyline(bow, True).crossings() == [(0, 2)]
+    assert Polyline(square, True).crossings() == []
+    shifted = Polyline(square + np.array([0.5, 0.5]), True)
+    assert Polyline(square, True).crossings(shifted) == [(1, 0), (2, 3)]
 
 
 def test_start_pose_outside_the_track(stadium) -> None:

@@ -131,4 +131,4 @@ def loop_projector(closed: bool, grid: bool = False) -> PathProjector:
     if grid:
         xy = np.round(xy)
         xy = xy[np.r_[True, np.any(np.diff(xy, axis=0) != 0.0, axis=1)]]
-    return PathProjector(global_path_from_centreline(xy, closed=closed))
+    return PathProjector(global_path_from_centreline(xy, closed=closed).polyline)
