@@ -1,9 +1,18 @@
-"""``run.png``: a run at a glance.
+"""``run.png``: a run at a glance, with what happened marked.
 
-Three panels: the car's trajectory on the track (cones by kind, the global
-path by covariance status), the localization error over time (position and
-heading, sampled at every TF broadcast), and the speed against the planned
-speed.
+Three panels:
+
+- the map: the cones by kind, the global path by covariance status, the
+  car's trajectory (its CG, the truth) drawn over them, and the run's events:
+  cones hit (rings) and knocked down or out (crosses), the stretches driven
+  off the track (red), where each lap ended (numbered) and where the run
+  ended, with why;
+- the localization error over time (position and heading, at every TF
+  broadcast), off-track stretches shaded;
+- the speed against the planned speed, the laps' ends as vertical lines.
+
+Every line has a legend entry; the map's legend sits beside the map, not on
+the track.
 """
 
 from __future__ import annotations
@@ -13,6 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
@@ -23,46 +33,112 @@ from conesim.tracks.global_path import GlobalPath
 if TYPE_CHECKING:  # the closed loop (and its compiled kernels) loads only for a run
     from conesim.envs.runner import RunResult
 
+TRAJECTORY = "#9400d3"
+EVENT = "#d62728"
+
 
 def save_run_picture(result: RunResult, track: Track, path: GlobalPath, out: Path) -> Path:
     """Draw the three panels to ``out`` (PNG, written atomically)."""
-    tr = result.trace
-    fig = Figure(figsize=(14, 5), dpi=100)
+    fig = Figure(figsize=(16, 5.5), dpi=100)
     FigureCanvasAgg(fig)
     ax_map, ax_loc, ax_speed = fig.subplots(1, 3, gridspec_kw={"width_ratios": [1.3, 1, 1]})
-    draw_track(ax_map, track, path)
-    ax_map.plot(tr.x, tr.y, color="#9400d3", lw=1.2, label="car (CG, truth)")
-    ax_map.legend(loc="upper left", fontsize=6, framealpha=0.8)
-    ax_map.set_title(
-        f"{result.track}: {result.laps_completed}/{result.laps} laps, {result.end_reason}"
-    )
-
-    ax_loc.plot(tr.loc_t, tr.loc_pos_err, color="#1f77b4", lw=1.0, label="position [m]")
-    ax_loc.set_xlabel("time [s]")
-    ax_loc.set_ylabel("position error [m]")
-    twin = ax_loc.twinx()
-    twin.plot(tr.loc_t, np.degrees(tr.loc_yaw_err), color="#ff7f0e", lw=0.8, label="heading [deg]")
-    twin.set_ylabel("heading error [deg]")
-    pos = result.localization_pos_rmse_m
-    yaw = result.localization_yaw_rmse_deg
-    ax_loc.set_title(
-        f"{result.localization} localization, {result.sensors} sensors: RMSE "
-        + ("n/a" if pos is None or yaw is None else f"{pos:.3f} m, {yaw:.2f} deg")
-    )
-    ax_loc.grid(True, lw=0.3)
-
-    ax_speed.plot(tr.t, tr.speed, color="#2ca02c", lw=1.0, label="speed (truth)")
-    ax_speed.plot(tr.t, tr.target_speed, color="#c000c0", lw=0.8, ls="--", label="planned speed")
-    ax_speed.set_xlabel("time [s]")
-    ax_speed.set_ylabel("speed [m/s]")
-    laps = ", ".join(f"{t:.2f}" for t in result.lap_times_s) or "none"
-    ratio = result.lap_time_ratio
-    ax_speed.set_title(
-        f"laps [s]: {laps}; limit {result.limit_lap_time_s:.2f} s"
-        + ("" if ratio is None or not math.isfinite(ratio) else f" ({ratio:.2f}x)")
-    )
-    ax_speed.legend(loc="lower right", fontsize=7)
-    ax_speed.grid(True, lw=0.3)
+    _map(ax_map, result, track, path)
+    _localization(ax_loc, result)
+    _speed(ax_speed, result)
     fig.tight_layout()
     save_figure(fig, out)
     return out
+
+
+def _map(ax: Axes, result: RunResult, track: Track, path: GlobalPath) -> None:
+    tr = result.trace
+    ev = result.events
+    draw_track(ax, track, path)
+    x, y, t = np.asarray(tr.x), np.asarray(tr.y), np.asarray(tr.t)
+    ax.plot(x, y, color=TRAJECTORY, lw=1.4, label="car (CG, truth)", zorder=5)
+    for k, excursion in enumerate(ev.off_track):
+        end = excursion.t_end if excursion.t_end is not None else math.inf
+        off = (t >= excursion.t_start) & (t <= end)
+        label = f"off track ({len(ev.off_track)})" if k == 0 else None
+        ax.plot(x[off], y[off], color=EVENT, lw=3.0, label=label, zorder=6)
+    if ev.cones_hit:
+        ax.scatter(
+            [c.x for c in ev.cones_hit], [c.y for c in ev.cones_hit], s=90,
+            facecolors="none", edgecolors=EVENT, linewidths=1.2,
+            label=f"cone hit ({len(ev.cones_hit)})", zorder=7,
+        )  # fmt: skip
+    if ev.cones_down_or_out:
+        ax.scatter(
+            [c.x for c in ev.cones_down_or_out], [c.y for c in ev.cones_down_or_out], s=60,
+            marker="x", c=EVENT, linewidths=1.6,
+            label=f"cone down or out ({len(ev.cones_down_or_out)})", zorder=8,
+        )  # fmt: skip
+    ends = [int(np.argmin(np.abs(t - lap.t))) for lap in ev.laps] if len(t) else []
+    if ends:
+        ax.scatter(
+            x[ends], y[ends], s=40, c="black", marker="D",
+            label=f"lap ends ({len(ends)}): " + ", ".join(f"{lap.time_s:.2f} s" for lap in ev.laps),
+            zorder=9,
+        )  # fmt: skip
+        for k, (i, lap) in enumerate(zip(ends, ev.laps, strict=True)):
+            ax.annotate(
+                str(lap.lap), (x[i], y[i]), xytext=(6, 6 + 9 * k), textcoords="offset points",
+                fontsize=7, zorder=9,
+            )  # fmt: skip
+    if ev.end is not None:
+        ax.scatter(
+            [ev.end.x], [ev.end.y], s=140, marker="*", c="black", edgecolors="white",
+            label=f"end: {ev.end.reason} at {ev.end.t:.1f} s", zorder=10,
+        )  # fmt: skip
+    ax.set_title(f"{result.track}: {result.laps_completed}/{result.laps} laps, {result.end_reason}")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=6, framealpha=0.9)
+
+
+def _shade_off_track(ax: Axes, result: RunResult) -> None:
+    for excursion in result.events.off_track:
+        end = excursion.t_end if excursion.t_end is not None else result.sim_time_s
+        ax.axvspan(excursion.t_start, end, color=EVENT, alpha=0.15, lw=0)
+
+
+def _localization(ax: Axes, result: RunResult) -> None:
+    tr = result.trace
+    (pos,) = ax.plot(tr.loc_t, tr.loc_pos_err, color="#1f77b4", lw=1.0, label="position [m]")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("position error [m]")
+    twin = ax.twinx()
+    (yaw,) = twin.plot(
+        tr.loc_t, np.degrees(tr.loc_yaw_err), color="#ff7f0e", lw=0.8, label="heading [deg]"
+    )
+    twin.set_ylabel("heading error [deg]")
+    _shade_off_track(ax, result)
+    rmse_pos = result.localization_pos_rmse_m
+    rmse_yaw = result.localization_yaw_rmse_deg
+    ax.set_title(
+        f"{result.localization} localization, {result.sensors} sensors: RMSE "
+        + (
+            "n/a"
+            if rmse_pos is None or rmse_yaw is None
+            else f"{rmse_pos:.3f} m, {rmse_yaw:.2f} deg"
+        )
+    )
+    ax.legend(handles=[pos, yaw], loc="upper right", fontsize=7)
+    ax.grid(True, lw=0.3)
+
+
+def _speed(ax: Axes, result: RunResult) -> None:
+    tr = result.trace
+    ax.plot(tr.t, tr.speed, color="#2ca02c", lw=1.0, label="speed (truth)")
+    ax.plot(tr.t, tr.target_speed, color="#c000c0", lw=0.8, ls="--", label="planned speed")
+    for k, lap in enumerate(result.events.laps):
+        ax.axvline(lap.t, color="black", lw=0.6, ls=":", label="lap ends" if k == 0 else None)
+    _shade_off_track(ax, result)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("speed [m/s]")
+    laps = ", ".join(f"{t:.2f}" for t in result.lap_times_s) or "none"
+    ratio = result.lap_time_ratio
+    ax.set_title(
+        f"laps [s]: {laps}; limit {result.limit_lap_time_s:.2f} s"
+        + ("" if ratio is None or not math.isfinite(ratio) else f" ({ratio:.2f}x)")
+    )
+    ax.legend(loc="lower right", fontsize=7)
+    ax.grid(True, lw=0.3)

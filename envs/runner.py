@@ -24,7 +24,7 @@ from conesim.core.polyline import Polyline
 from conesim.envs.bag import BagRecorder
 from conesim.envs.limit_lap import limit_lap_time
 from conesim.envs.loop import ClosedLoop, EpisodeRules, StepRecord, world_seed
-from conesim.envs.metrics import RunMetrics, RunTrace
+from conesim.envs.metrics import RunEvents, RunMetrics, RunTrace
 from conesim.envs.render import Renderer, SceneKeeper
 from conesim.planner import Autopilot, AutopilotConfig
 from conesim.planner.autopilot import CONTROL_RATE, default_config
@@ -65,6 +65,7 @@ class RunResult:
     planner_fallbacks: int
     limit_lap_time_s: float
     lap_time_ratio: float | None
+    events: RunEvents = field(default_factory=RunEvents)
     trace: RunTrace = field(repr=False, default_factory=RunTrace)
 
     def to_json(self) -> dict[str, Any]:
@@ -278,5 +279,6 @@ def _result(
         planner_fallbacks=metrics.fallbacks,
         limit_lap_time_s=limit,
         lap_time_ratio=None if best is None else best / limit,
+        events=metrics.events,
         trace=metrics.trace,
     )
