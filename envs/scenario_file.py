@@ -44,6 +44,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import os
+import re
 import typing
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
@@ -208,8 +209,11 @@ def _scenario(data: dict[str, Any]) -> Scenario:
         return Scenario(**values)
     except ValueError as exc:
         reason = str(exc)
-        field = reason.removeprefix("Scenario.").split(" ")[0].rstrip(":")
-        raise FieldError((field,) if field in SCALARS else (), reason) from None
+        # at the first key the message names that the mapping sets (else the first named)
+        named = [word for word in re.findall(r"\w+", reason) if word in SCALARS]
+        given = [word for word in named if word in data]
+        path = (given or named)[:1]
+        raise FieldError(tuple(path), reason) from None
 
 
 def _group(value: Any, name: str, head: str, allowed: list[str]) -> tuple[Any, dict[str, Any]]:
@@ -321,10 +325,9 @@ def scenario_to_mapping(scenario: Scenario) -> dict[str, Any]:
     out["sensors"].update(plain(full.sensors))
     out["faults"] = plain(full.faults)
     out["ekf"] = {"tuning": full.ekf_tuning, **plain(full.ekf, HIDDEN)}
-    preset: dict[str, str] = {}
-    if scenario.autopilot is None:
-        preset["preset"] = "cautious" if full.localization == "raw" else "default"
-    out["autopilot"] = {**preset, **plain(full.autopilot, HIDDEN)}
+    # the preset the fields start from: with every field listed, only a label
+    preset = "cautious" if full.autopilot == AutopilotConfig.cautious() else "default"
+    out["autopilot"] = {"preset": preset, **plain(full.autopilot, HIDDEN)}
     out["vehicle"] = plain(full.vehicle)
     return out
 
