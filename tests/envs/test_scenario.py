@@ -110,3 +110,12 @@ def test_rates_and_limits_are_plain_floats() -> None:
     s = Scenario(control_rate=50, physics_rate=200, time_limit=30)
     assert type(s.control_rate) is float and type(s.time_limit) is float
     assert s == Scenario(control_rate=50.0, physics_rate=200.0, time_limit=30.0)
+
+
+def test_a_scenario_pickles_for_worker_processes() -> None:
+    """A sweep runs scenarios in worker processes: one pickles and compares equal."""
+    import pickle
+
+    s = Scenario(sensors=get_profile("consumer"), faults=Faults(gps=GpsFaults(multipath_rate=0.1)))
+    assert pickle.loads(pickle.dumps(s)) == s
+    assert pickle.loads(pickle.dumps(s.resolved())) == s.resolved()

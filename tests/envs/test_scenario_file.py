@@ -270,3 +270,15 @@ def test_an_override_error_names_the_override(
     with pytest.raises(FieldError) as info:
         load_scenario(path, [override])
     assert str(info.value).startswith(message), str(info.value)
+
+
+def test_the_readmes_example_loads() -> None:
+    """The YAML block of the README's Scenarios section is a valid scenario."""
+    readme = (EXAMPLE.parents[1] / "README.md").read_text()
+    section = readme[readme.index("### Scenarios") :]
+    block = section[
+        section.index("```yaml\n") + 8 : section.index("```\n", section.index("```yaml"))
+    ]
+    s = scenario_from_mapping(parse_yaml(block, "README.md")[0])
+    assert s.track == "autocross" and s.faults.gps.dropouts == ((12.0, 14.0),)
+    assert s.autopilot is not None and s.autopilot.classifier.mode == "colour"
