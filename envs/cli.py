@@ -6,18 +6,26 @@ Subcommands:
 * ``conesim track show NAME|PATH --out FILE.png``: a picture of the cones by kind
   and the global path coloured by covariance status.
 * ``conesim track check NAME|PATH [--json]``: the Formula Student validator.
-* ``conesim run``: one headless closed-loop scenario (``envs.runner``): a
-  results table, ``DIR/result.json`` and ``DIR/run.png``; with ``--bag BAG``
-  also a ROS 2 bag of the run (``envs.bag``). A track in which ``track
-  check`` finds errors is bad input for ``run`` (warnings are not).
+* ``conesim run [SCENARIO.yaml] [--set KEY=VALUE ...] [flags]``: one
+  headless closed-loop scenario (``envs.runner``): a results table,
+  ``DIR/result.json`` and ``DIR/run.png``; with ``--bag BAG`` also a ROS 2
+  bag of the run (``envs.bag``). The scenario is the file's
+  (``envs.scenario_file``), changed by each ``--set``, then by the flags
+  (``--track``, ``--laps``, ``--seed``, ``--sensors``, ``--localization``).
+  A track in which ``track check`` finds errors is bad input for ``run``
+  (warnings are not). ``--out`` must be new, empty or a previous run's
+  (``envs.run_dir``).
+* ``conesim scenario show [SCENARIO.yaml] [--set ...] [flags]``: the scenario
+  ``run`` would run, as YAML with every default filled in.
 
 ``-v`` (log the nodes' warnings) goes before or after the subcommand.
 
 Exit codes: 0 success (``run``: every lap completed), 1 a check found errors
 or a run did not finish (off track, stuck, time limit), 2 bad input (one line
 on stderr per problem, naming the file or option and what is wrong; never a
-traceback; nothing written), 141 the reader of stdout went away (a pipe into
-``head``), quietly, as a shell reports a command ended by SIGPIPE.
+traceback; nothing written; argparse's errors too), 141 the reader of stdout
+went away (a pipe into ``head``), quietly, as a shell reports a command
+ended by SIGPIPE.
 """
 
 from __future__ import annotations
@@ -36,11 +44,13 @@ from typing import TYPE_CHECKING, TextIO
 from gymnasium.error import DependencyNotInstalled
 
 from conesim.core.geodesy import GeodesyError
-from conesim.envs.paths import missing_dirs, nearest_existing, os_reason, probe_writable
+from conesim.envs.cli_parser import CliError, build_parser
+from conesim.envs.dataclass_io import FieldError
+from conesim.envs.paths import missing_dirs, nearest_existing, os_reason
+from conesim.envs.run_dir import OUTPUT_FILES, RunDirError, check_run_dir
 from conesim.envs.run_plot import save_run_picture
 from conesim.envs.track_plot import save_track_picture
-from conesim.localization.modes import LOCALIZATION_MODES
-from conesim.sim.sensors import PROFILES as SENSOR_PROFILES
+from conesim.envs.yaml_io import parse_value
 from conesim.tracks import (
     DEFAULT_TRACK,
     Track,
@@ -57,75 +67,16 @@ from conesim.tracks.global_path import (
 
 if TYPE_CHECKING:
     from conesim.envs.runner import RunResult
+    from conesim.envs.scenario import Scenario
+    from conesim.envs.scenario_file import Override
 
 EXIT_OK = 0
 EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE: what a shell reports for a reader that went away
 
-INPUT_ERRORS = (TrackFormatError, GlobalPathError, GeodesyError, FileNotFoundError)
-
-
-VERBOSE_HELP = "log the nodes' warnings (rejected messages)"
-
-
-class CliError(Exception):
-    """Bad input found by the command line itself (one line per problem)."""
-
-
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser for every subcommand."""
-    parser = argparse.ArgumentParser(
-        prog="conesim",
-        description="Closed-loop 2D simulator for Formula Student cone tracks.",
-    )
-    parser.add_argument("-v", "--verbose", action="store_true", help=VERBOSE_HELP)
-    # -v after the subcommand too; SUPPRESS keeps a -v given before it.
-    verbose = argparse.ArgumentParser(add_help=False)
-    verbose.add_argument(
-        "-v", "--verbose", action="store_true", default=argparse.SUPPRESS, help=VERBOSE_HELP
-    )
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-
-    sub.add_parser(
-        "tracks",
-        parents=[verbose],
-        help="list the shipped tracks with length, cones and width range",
-    )
-
-    track = sub.add_parser(
-        "track", parents=[verbose], help="inspect one track (shipped name or file)"
-    )
-    track_sub = track.add_subparsers(dest="track_command", required=True, metavar="ACTION")
-    show = track_sub.add_parser(
-        "show", parents=[verbose], help="draw cones and global path to a PNG"
-    )
-    show.add_argument("track", help="shipped track name or a track file (conesim/fssim/EUFS/FSDS)")
-    show.add_argument("--out", required=True, help="output PNG file")
-    check = track_sub.add_parser(
-        "check", parents=[verbose], help="validate against Formula Student rules"
-    )
-    check.add_argument("track", help="shipped track name or a track file")
-    check.add_argument("--json", action="store_true", help="print one JSON object")
-
-    run = sub.add_parser(
-        "run", parents=[verbose], help="run one headless closed-loop scenario with the autopilot"
-    )
-    run.add_argument("--track", default=DEFAULT_TRACK, help="shipped track name or a track file")
-    run.add_argument("--laps", type=int, default=1, help="laps to drive (default 1)")
-    run.add_argument("--seed", type=int, default=0, help="episode seed (default 0)")
-    run.add_argument("--sensors", default="rtk", choices=list(SENSOR_PROFILES))
-    run.add_argument("--localization", default="fused", choices=list(LOCALIZATION_MODES))
-    run.add_argument("--out", default="runs/latest", help="output directory (default runs/latest)")
-    run.add_argument("--render", action="store_true", help="show a window (render extra)")
-    run.add_argument("--json", action="store_true", help="print result.json to stdout")
-    run.add_argument(
-        "--bag",
-        metavar="DIR",
-        help="also record the run as a ROS 2 bag (rosbag2, MCAP) in the new directory DIR "
-        "(ros extra)",
-    )
-    return parser
+INPUT_ERRORS = (TrackFormatError, GlobalPathError, GeodesyError, FileNotFoundError, FieldError)
+__all__ = ["EXIT_BAD_INPUT", "CliError", "build_parser", "main"]
 
 
 def cmd_tracks() -> int:
@@ -203,37 +154,99 @@ def cmd_track_check(name: str, as_json: bool) -> int:
 
 
 MAX_LAPS = 100
+FLAGS = {
+    "track": "track",
+    "laps": "laps",
+    "seed": "seed",
+    "sensors": "sensors.profile",
+    "localization": "localization",
+}
+"""``run``'s flags and the scenario key each sets."""
+
+
+def _overrides(args: argparse.Namespace) -> list[Override]:
+    """The ``--set`` changes, in order, then the flags' (which win)."""
+    from conesim.envs.scenario_file import Override  # noqa: PLC0415 (with the loop: cmd_run)
+
+    out = []
+    for item in args.set:
+        key, eq, text = item.partition("=")
+        if not eq or not key.strip():
+            raise CliError(f"--set {item}: expected KEY=VALUE, e.g. --set laps=2")
+        try:
+            value = parse_value(text)
+        except FieldError as exc:
+            raise CliError(f"--set {item}: {exc.reason}") from None
+        out.append(Override(key.strip(), value, f"--set {item}"))
+    for flag, key in FLAGS.items():
+        value = getattr(args, flag)
+        if value is not None:
+            out.append(Override(key, value, f"--{flag} {value}"))
+    return out
+
+
+def _scenario(args: argparse.Namespace) -> Scenario:
+    """The scenario of the arguments: the file's, then ``--set``, then the flags.
+
+    The flags' own ranges are checked first, so that their errors name them.
+    """
+    from conesim.envs.scenario_file import load_scenario  # noqa: PLC0415 (with the loop)
+
+    if args.laps is not None and not 1 <= args.laps <= MAX_LAPS:
+        raise CliError(f"--laps {args.laps}: must be in [1, {MAX_LAPS}]")
+    if args.seed is not None and not 0 <= args.seed < 2**63:
+        raise CliError(f"--seed {args.seed}: must be a non-negative integer below 2**63")
+    if args.track is not None and not args.track.strip():
+        raise CliError("--track: empty track name; give a shipped track name or a track file")
+    return load_scenario(args.scenario, _overrides(args))
+
+
+def cmd_scenario_show(args: argparse.Namespace) -> int:
+    """Print the scenario ``run`` would run, every default filled in, as YAML.
+
+    The track is read too, so a scenario that shows is one that runs.
+    """
+    from conesim.envs.scenario_file import scenario_yaml  # noqa: PLC0415 (with the loop)
+
+    scenario = _scenario(args)
+    _load_track(scenario.track, "track")
+    sys.stdout.write(scenario_yaml(scenario))
+    return EXIT_OK
 
 
 def cmd_run(args: argparse.Namespace) -> int:
     """Run one scenario; write result.json and run.png; print the results.
 
-    Every input is checked before the run (track, including the validator
-    that ``track check`` runs, laps, seed, output directory, the render
-    extra, the bag directory and the ros extra), so bad input costs no
-    simulation and writes nothing; the output directory is created only once
-    the results exist, and the two outputs are written to temporary files
-    and moved into place together. The bag is written beside its target and
-    moved into place at the end of the run; it is removed again if the two
-    outputs cannot be written.
+    Every input is checked before the run (the scenario file and its
+    overrides, the track, including the validator that ``track check``
+    runs, the output directory, the render extra, the bag directory and the
+    ros extra), so bad input costs no simulation and writes nothing; the
+    output directory is created only once the results exist, and the two
+    outputs are written to temporary files and moved into place together.
+    The bag is written beside its target and moved into place at the end of
+    the run; it is removed again if the two outputs cannot be written.
     """
     # The closed loop (and its compiled kernels) loads only here: `tracks`,
     # `track check` and `--help` neither pay for it nor print its warnings.
     from conesim.envs.runner import run_scenario  # noqa: PLC0415
 
-    if not 1 <= args.laps <= MAX_LAPS:
-        raise CliError(f"--laps {args.laps}: must be in [1, {MAX_LAPS}]")
-    if not 0 <= args.seed < 2**63:
-        raise CliError(f"--seed {args.seed}: must be a non-negative integer below 2**63")
     if not args.out.strip():
         raise CliError("--out: empty directory name; give the output directory")
-    track = _load_track(args.track, "--track")
+    scenario = _scenario(args)
+    track = _load_track(scenario.track, "--track" if args.track is not None else "track")
     global_path = global_path_for_track(track)
     errors = check_report(track)["errors"]
     if errors:
-        raise CliError("\n".join(f"{args.track}: {error}" for error in errors))
+        raise CliError("\n".join(f"{scenario.track}: {error}" for error in errors))
     out = Path(args.out)
-    _check_output_dir(out)
+    try:
+        check_run_dir(
+            out,
+            scenario=None if args.scenario is None else Path(args.scenario),
+            bag=None if args.bag is None else Path(args.bag),
+        )
+    except RunDirError as exc:
+        raise CliError(f"--out {exc}") from None
     if args.render:
         _check_render_extra()
     bar = ProgressBar(sys.stderr) if sys.stderr.isatty() and not args.json else None
@@ -245,14 +258,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         bag_existed, bag_parents = bag_path.is_dir(), missing_dirs(bag_path.parent)
     with _bag_errors():
         result = run_scenario(
-            args.track,
-            laps=args.laps,
-            seed=args.seed,
-            sensors=args.sensors,
-            localization=args.localization,
-            render=args.render,
-            progress=bar.update if bar else None,
-            bag=args.bag,
+            scenario, render=args.render, progress=bar.update if bar else None, bag=args.bag
         )
     if bar:
         bar.close()
@@ -268,31 +274,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.json:
         print(payload)
     else:
-        print(format_result(result, out, args.bag))
+        print(format_result(result, out, args.bag, args.scenario))
     return EXIT_OK if result.finished else EXIT_FAILED
-
-
-OUTPUT_FILES = ("run.png", "result.json")  # the order they are moved into place
-
-
-def _check_output_dir(out: Path) -> None:
-    """Prove ``--out`` can be created and written, before any simulation, creating nothing.
-
-    The directory itself, or its nearest existing ancestor when it does not
-    exist yet, must be a writable directory (a probe file is created there and
-    removed), and neither output may exist as a directory.
-    """
-    try:
-        base = nearest_existing(out)
-        if not base.is_dir():
-            where = "is not a directory" if base == out else f"{base} is not a directory"
-            raise CliError(f"--out {out}: {where}")
-        for name in OUTPUT_FILES:
-            if (out / name).is_dir():
-                raise CliError(f"--out {out}: {out / name} is a directory, not a file")
-        probe_writable(base)
-    except OSError as exc:
-        raise CliError(f"--out {out}: cannot write there ({os_reason(exc)})") from None
 
 
 @contextlib.contextmanager
@@ -376,8 +359,11 @@ def _remove_temporaries(paths: Iterable[Path]) -> None:
             path.unlink(missing_ok=True)
 
 
-def format_result(result: RunResult, out: Path, bag: str | None = None) -> str:
-    """The results table ``conesim run`` prints (``bag``: the bag written, if any)."""
+def format_result(
+    result: RunResult, out: Path, bag: str | None = None, scenario: str | None = None
+) -> str:
+    """The results table ``conesim run`` prints (``bag``: the bag written, if any;
+    ``scenario``: the scenario file run, if any)."""
 
     def num(value: float | None, fmt: str) -> str:
         return "n/a" if value is None else format(value, fmt)
@@ -386,7 +372,8 @@ def format_result(result: RunResult, out: Path, bag: str | None = None) -> str:
     written = [str(out / "result.json"), str(out / "run.png"), *([] if bag is None else [bag])]
     ratio = result.lap_time_ratio
     best = "n/a" if ratio is None or not math.isfinite(ratio) else f"{ratio:.2f}x"
-    rows = [
+    rows = [] if scenario is None else [("scenario", scenario)]
+    rows += [
         (
             "track",
             f"{result.track} ({result.sensors} sensors, {result.localization} "
@@ -443,12 +430,12 @@ class ProgressBar:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``conesim`` console script."""
-    args = build_parser().parse_args(argv)
-    logging.basicConfig(
-        level=logging.WARNING if args.verbose else logging.ERROR,
-        format="conesim: %(name)s: %(message)s",
-    )
     try:
+        args = build_parser().parse_args(argv)
+        logging.basicConfig(
+            level=logging.WARNING if args.verbose else logging.ERROR,
+            format="conesim: %(name)s: %(message)s",
+        )
         if args.command == "tracks":
             return cmd_tracks()
         if args.command == "track" and args.track_command == "show":
@@ -457,6 +444,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return cmd_track_check(args.track, args.json)
         if args.command == "run":
             return cmd_run(args)
+        if args.command == "scenario" and args.scenario_command == "show":
+            return cmd_scenario_show(args)
     except (*INPUT_ERRORS, CliError) as exc:
         for line in str(exc).splitlines() or [""]:
             print(f"conesim: error: {line}", file=sys.stderr)

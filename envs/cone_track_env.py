@@ -44,10 +44,13 @@ at the time limit (``time_limit``; default 60 s per lap + 30 s).
 ## Arguments
 ``gymnasium.make("conesim:conesim/ConeTrack-v0", track="autocross", sensors="rtk",
 localization="fused", laps=1, control_rate=50, observation="vector",
-render_mode="rgb_array", ...)``; every ``envs.config.EnvConfig`` field. Unknown
-keys raise, listing the allowed ones. ``reset(options=...)`` takes ``track``,
-``sensors``, ``localization`` and ``start_pose`` ((x, y, yaw) of the CG) for
-that episode only.
+render_mode="rgb_array", ...)``; every ``envs.config.EnvConfig`` field, or
+``scenario=`` (a ``Scenario`` or a scenario file) with the keywords given
+beside it changing its parts; ``sensors`` may be a ``SensorProfile``, and
+``faults``, ``ekf`` and ``vehicle`` objects or mappings. Unknown keys raise,
+listing the allowed ones. ``reset(options=...)`` takes ``track``,
+``sensors`` (a name or a profile), ``localization`` and ``start_pose``
+((x, y, yaw) of the CG) for that episode only.
 
 ## Version History
 * v0: first release (conesim 0.1.0, unreleased: its dict observation grew
@@ -57,6 +60,7 @@ that episode only.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any, SupportsFloat
 
@@ -67,12 +71,13 @@ from numpy.typing import NDArray
 from conesim.core.geodesy import GeodesyError
 from conesim.core.pose import Pose2D
 from conesim.envs.config import EnvConfig
-from conesim.envs.loop import Broadcast, ClosedLoop, EpisodeRules, StepRecord, world_seed
+from conesim.envs.loop import Broadcast, ClosedLoop, StepRecord, world_seed
 from conesim.envs.observation import SensorMemory, build_observation, observation_space
 from conesim.envs.render import Renderer, Scene, SceneKeeper
+from conesim.envs.scenario import Localization
 from conesim.planner.messages import ControlCommand
 from conesim.sim.events import RaceStanding
-from conesim.sim.world import WorldConfig
+from conesim.sim.sensors import SensorProfile, get_profile
 from conesim.tracks import Track, load_track
 
 ObsType = NDArray[np.float32] | dict[str, NDArray[np.float32]]
@@ -234,21 +239,17 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         a = accel / p.max_accel if accel >= 0 else accel / p.max_decel
         return np.clip(np.array([steer / p.max_steer, a], dtype=np.float32), -1.0, 1.0)
 
-    def _build_loop(self, track_name: str, sensors: str, localization: str) -> ClosedLoop:
-        """A loop for one episode with these settings, the env's rates and rules."""
-        cfg = self.config
-        return ClosedLoop(
-            self._track(track_name),
-            WorldConfig(physics_rate=cfg.physics_rate, sensors=sensors),
+    def _build_loop(
+        self, track_name: str, sensors: SensorProfile | str, localization: Localization
+    ) -> ClosedLoop:
+        """A loop for one episode: the env's scenario with this track, sensors, localization."""
+        scenario = dataclasses.replace(
+            self.config.to_scenario(),
+            track=track_name,
+            sensors=sensors if isinstance(sensors, SensorProfile) else get_profile(sensors),
             localization=localization,
-            control_rate=cfg.control_rate,
-            rules=EpisodeRules(
-                laps=cfg.laps,
-                time_limit=cfg.time_limit,
-                end_on_off_track=cfg.terminate_off_track,
-                end_on_stuck=cfg.terminate_stuck,
-            ),
         )
+        return scenario.closed_loop(self._track(track_name))
 
     def _track(self, name: str) -> Track:
         if name not in self._track_cache:

@@ -1,6 +1,16 @@
 """Settings of the ConeTrack env: one frozen dataclass, built from keyword
 arguments (``gymnasium.make(..., track="autocross")``) or a mapping, with unknown
-keys rejected and the allowed keys listed."""
+keys rejected and the allowed keys listed.
+
+The settings of the episode itself are a scenario's (``envs.scenario``):
+``scenario=`` (a ``Scenario`` or a scenario file) gives them all at once,
+and the keywords given beside it change its parts; or the parts come one by
+one (``sensors=`` a profile or its name, ``faults=``, ``ekf=``,
+``vehicle=``, as objects or mappings). ``to_scenario()`` is the scenario
+the env's episodes run, so the env and ``conesim run`` build their loops
+alike. A scenario's ``seed`` is ``conesim run``'s: the env's episodes are
+seeded by ``reset(seed=...)`` (``reset(seed=scenario.seed)`` drives the
+run's episode)."""
 
 from __future__ import annotations
 
@@ -14,8 +24,15 @@ from typing import Any
 
 import numpy as np
 
+from conesim.envs.dataclass_io import build
+from conesim.envs.scenario import EkfTuning, Localization, Scenario
+from conesim.envs.scenario_file import load_scenario
+from conesim.localization.ekf import EkfConfig
 from conesim.localization.modes import LOCALIZATION_MODES
+from conesim.planner import AutopilotConfig
 from conesim.sim.sensors import PROFILES as SENSOR_PROFILES
+from conesim.sim.sensors import Faults, SensorProfile, get_profile
+from conesim.sim.vehicle_params import VehicleParams
 from conesim.tracks import DEFAULT_TRACK
 
 OBSERVATION_MODES = ("vector", "dict")
@@ -58,7 +75,8 @@ class EnvConfig:
 
     Attributes:
         track: shipped track name or a track file.
-        sensors: sensor profile (``ideal``, ``rtk``, ``consumer``, ``consumer_white``).
+        sensors: sensor profile, or a shipped one's name (``ideal``, ``rtk``,
+            ``consumer``, ``consumer_white``).
         localization: ``fused`` (EKF), ``raw`` (the ROS pipeline's) or ``truth``.
         laps: laps to complete [-].
         control_rate: actions per simulated second [Hz].
@@ -69,11 +87,18 @@ class EnvConfig:
         terminate_off_track: end the episode when the car leaves the track.
         terminate_stuck: end the episode when the car makes no progress.
         rewards: reward weights.
+        faults: what goes wrong with the sensors (``sim.sensors.faults``).
+        ekf: the filter's settings; None: the tuning ``ekf_tuning`` names
+            (``auto``: matched to the sensors, ``envs.ekf_tuning``).
+        ekf_tuning: as ``Scenario.ekf_tuning``.
+        vehicle: the car.
+        autopilot: the settings ``AutopilotExpert`` drives with by default
+            (None: the localization's default); the env itself has no driver.
     """
 
     track: str = DEFAULT_TRACK
     sensors: str = "rtk"
-    localization: str = "fused"
+    localization: Localization = "fused"
     laps: int = 1
     control_rate: float = 50.0  # [Hz] ARCHITECTURE.md control rate
     physics_rate: float = 200.0  # [Hz]
@@ -83,9 +108,18 @@ class EnvConfig:
     terminate_off_track: bool = True
     terminate_stuck: bool = True
     rewards: RewardWeights = dataclasses.field(default_factory=RewardWeights)
+    faults: Faults = dataclasses.field(default_factory=Faults)
+    ekf: EkfConfig | None = None
+    ekf_tuning: EkfTuning = "auto"
+    vehicle: VehicleParams = dataclasses.field(default_factory=VehicleParams)
+    autopilot: AutopilotConfig | None = None
 
     def __post_init__(self) -> None:
-        _choice("sensors", self.sensors, tuple(SENSOR_PROFILES))
+        if not isinstance(self.sensors, SensorProfile):
+            _choice("sensors", self.sensors, tuple(SENSOR_PROFILES))
+        for name, cls in (("faults", Faults), ("vehicle", VehicleParams), ("ekf", EkfConfig)):
+            if isinstance(getattr(self, name), Mapping):
+                object.__setattr__(self, name, build(cls, getattr(self, name), path=(name,)))
         _choice("localization", self.localization, LOCALIZATION_MODES)
         _choice("observation", self.observation, OBSERVATION_MODES)
         if not (isinstance(self.track, str | os.PathLike) and os.fspath(self.track)):
@@ -132,6 +166,7 @@ class EnvConfig:
         }
         for name, value in plain.items():
             object.__setattr__(self, name, value)
+        self.to_scenario()  # the episode's settings, checked as a scenario checks them
 
     @property
     def substeps(self) -> int:
@@ -143,14 +178,57 @@ class EnvConfig:
         """The truncation time [s]."""
         return self.time_limit if self.time_limit is not None else 60.0 * self.laps + 30.0
 
+    def to_scenario(self) -> Scenario:
+        """The scenario the env's episodes run (its seed: ``reset``'s, not this)."""
+        values = {field: getattr(self, key) for key, field in SCENARIO_FIELDS.items()}
+        if isinstance(self.sensors, str):
+            values["sensors"] = get_profile(self.sensors)
+        return Scenario(**values)
+
     @classmethod
     def from_dict(cls, values: Mapping[str, Any]) -> EnvConfig:
-        """Build from a mapping; unknown keys raise with the allowed keys listed."""
+        """Build from a mapping; unknown keys raise with the allowed keys listed.
+
+        ``scenario`` (a ``Scenario`` or a scenario file) gives the episode's
+        settings; the other keys change them.
+        """
+        values = dict(values)
+        scenario = values.pop("scenario", None)
         allowed = [f.name for f in dataclasses.fields(cls)]
         unknown = sorted(set(values) - set(allowed))
         if unknown:
-            raise ValueError(f"EnvConfig: unknown keys {unknown}; allowed keys: {allowed}")
-        return cls(**dict(values))
+            raise ValueError(
+                f"EnvConfig: unknown keys {unknown}; allowed keys: {[*allowed, 'scenario']}"
+            )
+        if scenario is not None:
+            if not isinstance(scenario, Scenario):
+                scenario = load_scenario(scenario)
+            values = {**scenario_settings(scenario), **values}
+        return cls(**values)
+
+
+SCENARIO_FIELDS = {
+    "track": "track",
+    "laps": "laps",
+    "time_limit": "time_limit",
+    "terminate_off_track": "end_on_off_track",
+    "terminate_stuck": "end_on_stuck",
+    "control_rate": "control_rate",
+    "physics_rate": "physics_rate",
+    "localization": "localization",
+    "sensors": "sensors",
+    "faults": "faults",
+    "ekf": "ekf",
+    "ekf_tuning": "ekf_tuning",
+    "autopilot": "autopilot",
+    "vehicle": "vehicle",
+}
+"""``EnvConfig`` key -> the ``Scenario`` field it is (all but the scenario's seed)."""
+
+
+def scenario_settings(scenario: Scenario) -> dict[str, Any]:
+    """The ``EnvConfig`` keys a scenario sets (all but its seed)."""
+    return {key: getattr(scenario, field) for key, field in SCENARIO_FIELDS.items()}
 
 
 def _weights(weights: Mapping[str, Any]) -> RewardWeights:

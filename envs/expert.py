@@ -43,8 +43,9 @@ class AutopilotExpert:
 
     Args:
         env: the env (a wrapped env is unwrapped).
-        config: the autopilot's settings; by default the runner's for the
-            episode's localization (``AutopilotConfig.cautious()`` with ``raw``).
+        config: the autopilot's settings; by default the env's (its
+            scenario's ``autopilot``), else the runner's for the episode's
+            localization (``AutopilotConfig.cautious()`` with ``raw``).
 
     Attributes:
         output: the autopilot's last step (its command, plans and path), or None.
@@ -65,7 +66,7 @@ class AutopilotExpert:
         self.autopilot = Autopilot(
             loop.localizer.frames,
             loop.global_path,
-            self.config or default_config(loop.localization),
+            self.config or self.env.config.autopilot or default_config(loop.localization),
             control_rate=loop.control_rate,
         )
         return self(info)

@@ -36,8 +36,8 @@ from numpy.typing import NDArray
 
 from conesim.core.messages import Message
 from conesim.core.pose import Pose2D
-from conesim.localization.ekf import PROFILES as EKF_PROFILES
-from conesim.localization.ekf import EkfConfig, for_profile
+from conesim.envs.ekf_tuning import matched_ekf
+from conesim.localization.ekf import EkfConfig
 from conesim.localization.frames import Buffer, TransformStamped
 from conesim.localization.localizer import Localizer
 from conesim.planner.autopilot import CONTROL_RATE, AutopilotStep
@@ -211,12 +211,6 @@ def world_seed(rng: np.random.Generator) -> int:
     return int(rng.integers(0, 2**31 - 1))
 
 
-def ekf_for(world: WorldConfig) -> EkfConfig:
-    """The filter's tuning for the world's sensor profile (``rtk``'s for a profile with none)."""
-    name = world.sensor_profile.name
-    return for_profile(name if name in EKF_PROFILES else "rtk")
-
-
 class ClosedLoop:
     """One car's closed loop on one clock (see the module docstring).
 
@@ -230,7 +224,9 @@ class ClosedLoop:
         driver: builds the driver for each episode (``Autopilot``, or a
             ``functools.partial`` of it with its config); None: the caller
             passes the command to :meth:`step`.
-        ekf: the filter's settings; default the world's sensor profile's.
+        ekf: the filter's settings; default the ones matched to the world's
+            sensor profile (``envs.ekf_tuning.matched_ekf``: its shipped
+            tuning, else rtk's, with its receiver's error model).
 
     Attributes:
         track, world_config, rules, control_rate, substeps: as given or derived.
@@ -266,7 +262,7 @@ class ClosedLoop:
             )
         self.control_rate = float(control_rate)
         self.substeps = round(ratio)
-        self.ekf_config = ekf or ekf_for(self.world_config)
+        self.ekf_config = ekf or matched_ekf(self.world_config.sensor_profile)
         self.global_path = global_path_for_track(track, self.world_config.origin)
         self._driver_factory = driver
         self.driver: Driver | None = None

@@ -1,14 +1,19 @@
 """Headless scenario runs: the closed loop, driven by the autopilot, measured.
 
 ``run_scenario`` is what ``conesim run``, the lap-completion tests and the
-benchmarks call: one episode of the closed loop (``envs.loop.ClosedLoop``)
-with the autopilot as its driver. Every step's record goes to the metrics
-(``envs.metrics``), and to the bag recorder and the window when asked for;
-the result, a ``RunResult``, is ``result.json`` (``to_json()``).
+benchmarks call: one episode of a scenario's closed loop
+(``envs.scenario.Scenario.closed_loop``) with the autopilot as its driver.
+It takes a whole ``Scenario``, or a track and the parts to change (the
+keywords it always took, and the parts of a scenario: sensors, faults,
+ekf, vehicle). Every step's record goes to the metrics (``envs.metrics``),
+and to the bag recorder and the window when asked for; the result, a
+``RunResult``, is ``result.json`` (``to_json()``), with the resolved
+scenario embedded so that the run can be reproduced from it.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import os
 import time
@@ -23,15 +28,18 @@ from conesim.core.geodesy import GeodesyError
 from conesim.core.polyline import Polyline
 from conesim.envs.bag import BagRecorder
 from conesim.envs.limit_lap import limit_lap_time
-from conesim.envs.loop import ClosedLoop, EpisodeRules, StepRecord, world_seed
+from conesim.envs.loop import ClosedLoop, StepRecord, world_seed
 from conesim.envs.metrics import RunEvents, RunMetrics, RunTrace
 from conesim.envs.render import Renderer, SceneKeeper
+from conesim.envs.scenario import Scenario
+from conesim.envs.scenario_file import scenario_to_mapping
+from conesim.localization.ekf import EkfConfig
 from conesim.planner import Autopilot, AutopilotConfig
-from conesim.planner.autopilot import CONTROL_RATE, default_config
 from conesim.sim.progress import PolylineProgress
 from conesim.sim.race_control import line_crossings_along
-from conesim.sim.world import WorldConfig
-from conesim.tracks import Track, TrackFormatError, load_track
+from conesim.sim.sensors import Faults, SensorProfile, get_profile
+from conesim.sim.vehicle_params import VehicleParams
+from conesim.tracks import DEFAULT_TRACK, Track, TrackFormatError, load_track
 
 TIMING_FIELDS = ("wall_time_s", "real_time_factor", "setup_time_s")
 """The fields of ``result.json`` that depend on the machine, not on the run:
@@ -40,7 +48,8 @@ the same seed gives the same result apart from them."""
 
 @dataclass
 class RunResult:
-    """What a run reports (``result.json``)."""
+    """What a run reports (``result.json``); ``scenario`` is the resolved scenario
+    (``envs.scenario_file.scenario_to_mapping``), from which the run can be made again."""
 
     track: str
     seed: int
@@ -67,6 +76,7 @@ class RunResult:
     lap_time_ratio: float | None
     events: RunEvents = field(default_factory=RunEvents)
     trace: RunTrace = field(repr=False, default_factory=RunTrace)
+    scenario: dict[str, Any] = field(repr=False, default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
         """The JSON-able result (the trace left out)."""
@@ -104,37 +114,38 @@ def timed_limit_lap(track: Track) -> float:
 
 
 def run_scenario(
-    track: str = "trackdrive",
+    track: Scenario | str | os.PathLike[str] = DEFAULT_TRACK,
     *,
-    laps: int = 1,
-    seed: int = 0,
-    sensors: str = "rtk",
-    localization: str = "fused",
+    laps: int | None = None,
+    seed: int | None = None,
+    sensors: SensorProfile | str | None = None,
+    localization: str | None = None,
     render: bool = False,
     progress: Callable[[float, float], None] | None = None,
     bag: str | os.PathLike[str] | None = None,
     autopilot: AutopilotConfig | None = None,
     time_limit: float | None = None,
-    control_rate: float = CONTROL_RATE,
-    physics_rate: float = 200.0,
+    control_rate: float | None = None,
+    physics_rate: float | None = None,
+    faults: Faults | None = None,
+    ekf: EkfConfig | None = None,
+    vehicle: VehicleParams | None = None,
 ) -> RunResult:
-    """Run one episode with the autopilot.
+    """Run one episode of a scenario with the autopilot.
 
     Args:
-        track: shipped track name or a track file.
-        laps: laps to drive.
-        seed: episode seed (the same episode as ``env.reset(seed=seed)``).
-        sensors: sensor profile.
-        localization: ``fused``, ``raw`` or ``truth``.
+        track: a whole ``Scenario``, or a shipped track's name or a track file
+            (then a ``Scenario`` with its defaults: ``conesim run``'s).
+        laps, seed, localization, autopilot, time_limit, control_rate,
+        physics_rate, faults, ekf, vehicle: replace the scenario's field of
+            the same name when given (None: the scenario's). ``seed`` gives
+            the same episode as ``env.reset(seed=seed)``.
+        sensors: replaces the scenario's sensors: a ``SensorProfile`` or a
+            shipped profile's name.
         render: show a window (the ``render`` extra).
         progress: called as ``progress(sim_time, time_limit)`` every control step.
         bag: record the run into a new rosbag2 directory there (``envs.bag``;
             the ``ros`` extra). The run is the same with and without it.
-        autopilot: the autopilot's settings; default
-            ``planner.autopilot.default_config(localization)``.
-        time_limit: truncation time [s]; None: 60 s per lap plus 30 s.
-        control_rate: the loop's clock [Hz].
-        physics_rate: physics steps per second [Hz], a multiple of ``control_rate``.
 
     Raises:
         TrackFormatError: the track cannot be read, or the world cannot be
@@ -144,36 +155,46 @@ def run_scenario(
             written (checked before the run; nothing is left half written).
         gymnasium.error.DependencyNotInstalled: ``bag`` without the ``ros`` extra.
     """
+    scenario = _scenario(
+        track, laps=laps, seed=seed, sensors=sensors, localization=localization,
+        autopilot=autopilot, time_limit=time_limit, control_rate=control_rate,
+        physics_rate=physics_rate, faults=faults, ekf=ekf, vehicle=vehicle,
+    )  # fmt: skip
     recorder = None
     if bag is not None:
         recorder = BagRecorder(
             bag,
-            {"conesim.track": track, "conesim.seed": str(seed), "conesim.sensors": sensors,
-             "conesim.localization": localization},
+            {"conesim.track": scenario.track, "conesim.seed": str(scenario.seed),
+             "conesim.sensors": scenario.sensors.name,
+             "conesim.localization": scenario.localization},
         )  # fmt: skip
     setup0 = time.perf_counter()  # building the loop loads (or compiles) the kernels
-    config = autopilot or default_config(localization)
-    with _world_build_errors(track):
-        the_track = load_track(track)
-        loop = ClosedLoop(
-            the_track,
-            WorldConfig(physics_rate=physics_rate, sensors=sensors),
-            localization=localization,
-            control_rate=control_rate,
-            rules=EpisodeRules(laps=laps, time_limit=time_limit),
-            driver=functools.partial(Autopilot, config=config),
-        )
-        first = loop.reset(world_seed(np.random.default_rng(seed)))
+    config = scenario.autopilot_config()
+    with _world_build_errors(scenario.track):
+        the_track = load_track(scenario.track)
+        loop = scenario.closed_loop(the_track, functools.partial(Autopilot, config=config))
+        first = loop.reset(world_seed(np.random.default_rng(scenario.seed)))
     window = _Window(loop) if render else None
     try:
         with recorder or nullcontext():
-            return _drive(
-                loop, first, seed=seed, progress=progress, recorder=recorder, window=window,
-                setup0=setup0,
+            result = _drive(
+                loop, first, seed=scenario.seed, progress=progress, recorder=recorder,
+                window=window, setup0=setup0,
             )  # fmt: skip
     finally:
         if window is not None:
             window.close()
+    result.scenario = scenario_to_mapping(scenario)
+    return result
+
+
+def _scenario(track: Scenario | str | os.PathLike[str], **given: Any) -> Scenario:
+    """``track`` as a scenario, with the fields ``given`` (not None) replaced."""
+    scenario = track if isinstance(track, Scenario) else Scenario(track=os.fspath(track))
+    changes = {name: value for name, value in given.items() if value is not None}
+    if isinstance(changes.get("sensors"), str):
+        changes["sensors"] = get_profile(changes["sensors"])
+    return dataclasses.replace(scenario, **changes) if changes else scenario
 
 
 @contextmanager

@@ -6,7 +6,9 @@ run's ``result.json`` under ``OUT/<track>-<sensors>-<localization>-<seed>/``.
 With ``--against REF`` it then compares every ``result.json`` with the one
 of the same name under ``REF``, apart from the fields that depend on the
 machine (wall time, real-time factor, setup time), and prints one line per
-run: ``same`` or the fields that differ.
+run: ``same`` or the fields that differ. A field the reference does not
+have (one that ``result.json`` gained since, such as ``scenario``) is listed
+as new but is no difference: every field the reference has must be the same.
 
 The list: every shipped track x ``rtk``/``consumer`` sensors x
 ``fused``/``raw``/``truth`` localization x seeds 0 and 1, one lap each.
@@ -83,9 +85,15 @@ def differences(a: dict[str, Any], b: dict[str, Any]) -> list[str]:
     return [f"{k}: {a.get(k)!r} -> {b.get(k)!r}" for k in keys if a.get(k) != b.get(k)]
 
 
+def new_keys(a: dict[str, Any], b: dict[str, Any]) -> list[str]:
+    """The keys of ``b`` that the reference ``a`` does not have."""
+    return sorted(set(b) - set(a))
+
+
 def compare(out: Path, ref: Path) -> int:
     """Print one line per run; the number of runs that differ or are missing."""
     bad = 0
+    added: set[str] = set()
     for track, sensors, localization, seed in runs():
         name = run_name(track, sensors, localization, seed)
         try:
@@ -96,13 +104,13 @@ def compare(out: Path, ref: Path) -> int:
             bad += 1
             continue
         diff = differences(old, new)
+        added.update(new_keys(old, new))
         print(f"{name}: same" if not diff else f"{name}: DIFFERS")
         for line in diff:
             print(f"    {line}")
-        added = sorted(set(new) - set(old))
-        if added:
-            print(f"    new fields, not in the reference (not compared): {', '.join(added)}")
         bad += bool(diff)
+    if added:
+        print(f"new fields, not in the reference (not compared): {', '.join(sorted(added))}")
     return bad
 
 

@@ -5,12 +5,22 @@ once per physics step with a ``TruthSample``, it returns the messages
 (``localization.messages``) delivered at that step. Profiles ("ideal", "rtk"
 (default), "consumer", "consumer_white") are frozen dataclass trees in
 ``profiles.py``; each sensor's noise model is in its own module's docstring.
+Faults (``faults.py``) are named changes to a profile's fields.
 """
 
 from __future__ import annotations
 
 from conesim.sim.sensors.cone_detector import ConeDetector, ConeDetectorConfig
 from conesim.sim.sensors.cone_map import ConeMap
+from conesim.sim.sensors.faults import (
+    ConeFaults,
+    Faults,
+    GpsFaults,
+    HeadingFaults,
+    ImuFaults,
+    WheelSpeedFaults,
+    apply_faults,
+)
 from conesim.sim.sensors.gps import GpsConfig, GpsReceiver
 from conesim.sim.sensors.heading import HeadingConfig, HeadingSensor
 from conesim.sim.sensors.imu import ImuConfig, ImuSensor
@@ -33,19 +43,26 @@ __all__ = [
     "CaptureClock",
     "ConeDetector",
     "ConeDetectorConfig",
+    "ConeFaults",
     "ConeMap",
+    "Faults",
     "GpsConfig",
+    "GpsFaults",
     "GpsReceiver",
     "HeadingConfig",
+    "HeadingFaults",
     "HeadingSensor",
     "ImuConfig",
+    "ImuFaults",
     "ImuSensor",
     "SensorProfile",
     "SensorSuite",
     "SensorTiming",
     "TruthSample",
     "WheelSpeedConfig",
+    "WheelSpeedFaults",
     "WheelSpeedSensor",
+    "apply_faults",
     "get_profile",
     "override",
 ]

@@ -17,12 +17,16 @@ total above; vertical GNSS error taken as twice horizontal, an assumption).
 
 Faults. Multipath: with probability ``multipath_probability`` a fix is
 displaced by exactly ``multipath_magnitude`` metres in a uniformly random
-direction (o[k]). Dropouts: during a window [start, start + duration) of the
-capture stamp the receiver either publishes fixes with status NO_FIX and NaN
-position and covariance (``dropout_mode="no_fix"``, as the u-blox driver keeps
-publishing when the fix is lost) or nothing (``"silent"``). The noise processes
-and the multipath draws advance at every capture whatever the faults, and each
-comes from its own stream, so switching a fault on changes no other fix.
+direction (o[k]). Bias drift: from ``drift_start`` on, the fix moves away
+from the truth at ``drift_rate`` (east, north) [m/s], d[k] = rate (t - start),
+added to e[k] (a solution that walks off, as an RTK fix falling back to a
+float solution does); the stated covariance does not grow with it.
+Dropouts: during a window [start, start + duration) of the capture stamp
+the receiver either publishes fixes with status NO_FIX and NaN position and
+covariance (``dropout_mode="no_fix"``, as the u-blox driver keeps publishing
+when the fix is lost) or nothing (``"silent"``). The noise processes and the
+multipath draws advance at every capture whatever the faults, and each comes
+from its own stream, so switching a fault on changes no other fix.
 """
 
 from __future__ import annotations
@@ -46,9 +50,11 @@ from conesim.sim.sensors.truth import TruthSample
 from conesim.sim.sensors.validation import (
     check_choice,
     check_non_negative,
+    check_pair,
     check_positive,
     check_probability,
 )
+from conesim.sim.sensors.windows import Windows, check_windows, in_windows
 
 DROPOUT_MODES = ("no_fix", "silent")
 VERTICAL_TO_HORIZONTAL = 2.0  # [-] reported vertical sigma / horizontal (assumption)
@@ -69,6 +75,8 @@ class GpsConfig(SensorTiming):
         dropout_mode: "no_fix" (NO_FIX messages) or "silent" (no message).
         multipath_probability: chance that a fix is an outlier, [0, 1].
         multipath_magnitude: size of an outlier's displacement [m].
+        drift_rate: (east, north) rate of the bias drift [m/s].
+        drift_start: capture time the drift starts from [s].
     """
 
     rate: float = 10.0  # [Hz]
@@ -78,10 +86,12 @@ class GpsConfig(SensorTiming):
     bias_tau: float = 60.0  # [s]
     reported_sigma: float | None = None  # [m]
     fix_status: NavSatStatus = NavSatStatus.FIX
-    dropouts: tuple[tuple[float, float], ...] = ()  # ((start [s], duration [s]), ...)
+    dropouts: Windows = ()  # ((start [s], duration [s]), ...)
     dropout_mode: str = "no_fix"
     multipath_probability: float = 0.0  # [-]
     multipath_magnitude: float = 20.0  # [m]
+    drift_rate: tuple[float, float] = (0.0, 0.0)  # [m/s] (east, north)
+    drift_start: float = 0.0  # [s]
 
     def _validate(self) -> None:
         owner = "GpsConfig"
@@ -94,17 +104,13 @@ class GpsConfig(SensorTiming):
             raise ValueError(
                 "GpsConfig.fix_status = NO_FIX is out of range: allowed FIX, SBAS_FIX, GBAS_FIX"
             )
-        for i, window in enumerate(self.dropouts):
-            if len(window) != 2:
-                raise ValueError(
-                    f"GpsConfig.dropouts[{i}] = {window!r} is out of range: "
-                    "allowed a pair (start [s], duration [s])"
-                )
-            check_non_negative(owner, f"dropouts[{i}].start", window[0], "[s]")
-            check_positive(owner, f"dropouts[{i}].duration", window[1], "[s]")
+        check_windows(owner, "dropouts", self.dropouts)
         check_choice(owner, "dropout_mode", self.dropout_mode, DROPOUT_MODES)
         check_probability(owner, "multipath_probability", self.multipath_probability)
         check_non_negative(owner, "multipath_magnitude", self.multipath_magnitude, "[m]")
+        rate = check_pair(owner, "drift_rate", self.drift_rate, "(east, north) [m/s]")
+        object.__setattr__(self, "drift_rate", rate)
+        check_non_negative(owner, "drift_start", self.drift_start, "[s]")
 
     @property
     def total_sigma(self) -> float:
@@ -113,7 +119,7 @@ class GpsConfig(SensorTiming):
 
     def in_dropout(self, t: float) -> bool:
         """Whether capture time ``t`` [s] falls in a dropout window."""
-        return any(start <= t < start + duration for start, duration in self.dropouts)
+        return in_windows(t, self.dropouts)
 
 
 class GpsReceiver:
@@ -152,6 +158,9 @@ class GpsReceiver:
         if u < self.config.multipath_probability:
             direction = np.array([math.cos(2 * math.pi * angle), math.sin(2 * math.pi * angle)])
             e = e + self.config.multipath_magnitude * direction
+        rate = self.config.drift_rate
+        if rate != (0.0, 0.0) and t > self.config.drift_start:  # without a drift: e itself
+            e = e + np.array(rate) * (t - self.config.drift_start)
         return e
 
     def capture(self, truth: TruthSample) -> NavSatFix | None:

@@ -8,15 +8,17 @@ each sample up to its own stamp).
 
 Measurement at capture k, for each channel (gyro z, accel x, accel y)::
 
-    m[k] = mean(true over the interval) + b[k] + sigma_d * v[k],
+    m[k] = mean(true over the interval) + c + b[k] + s * sigma_d * v[k],
     sigma_d = N / sqrt(dt_s),  v ~ N(0, 1)
     b[k+1] = b[k] + K * sqrt(dt) * w[k],      b[0] = 0 (calibrated at start)
 
 with N the white-noise density (gyro angle random walk, accelerometer velocity
-random walk), dt_s = 1 / rate the sample period, and K the bias random-walk
-density (``noise.BiasRandomWalk``; dt = time between captures). The message
-states the white-noise variance sigma_d^2 (a driver knows its noise density,
-not its current bias).
+random walk), dt_s = 1 / rate the sample period, K the bias random-walk
+density (``noise.BiasRandomWalk``; dt = time between captures), c a constant
+bias (``gyro_bias``, ``accel_bias``: a calibration left wrong) and s the
+``noise_scale`` (a part noisier than its datasheet). The message states the
+datasheet's white-noise variance sigma_d^2 (a driver knows its noise
+density, not its current bias, nor that the part is worse than specified).
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from conesim.sim.sensors.noise import BiasRandomWalk, white_sigma
 from conesim.sim.sensors.streams import stream
 from conesim.sim.sensors.timing import SensorTiming
 from conesim.sim.sensors.truth import TruthSample
-from conesim.sim.sensors.validation import check_non_negative
+from conesim.sim.sensors.validation import check_finite, check_non_negative, check_pair
 
 STANDARD_GRAVITY = 9.80665  # [m/s^2]
 
@@ -56,6 +58,10 @@ class ImuConfig(SensorTiming):
         accel_noise_density: accelerometer white-noise density [m/s^2/sqrt(Hz)].
         gyro_bias_walk: gyro bias random-walk density [rad/s/sqrt(s)].
         accel_bias_walk: accelerometer bias random-walk density [m/s^2/sqrt(s)].
+        gyro_bias: constant gyro bias [rad/s].
+        accel_bias: constant accelerometer bias (x, y) [m/s^2].
+        noise_scale: the white noise drawn is this times the densities' [-];
+            the messages state the densities' variance.
     """
 
     rate: float = 100.0  # [Hz]
@@ -64,6 +70,9 @@ class ImuConfig(SensorTiming):
     accel_noise_density: float = ADIS16448_ACCEL_DENSITY  # [m/s^2/sqrt(Hz)]
     gyro_bias_walk: float = 0.0  # [rad/s/sqrt(s)]
     accel_bias_walk: float = 0.0  # [m/s^2/sqrt(s)]
+    gyro_bias: float = 0.0  # [rad/s]
+    accel_bias: tuple[float, float] = (0.0, 0.0)  # [m/s^2] (x, y)
+    noise_scale: float = 1.0  # [-]
 
     def _validate(self) -> None:
         owner = "ImuConfig"
@@ -73,6 +82,10 @@ class ImuConfig(SensorTiming):
         )
         check_non_negative(owner, "gyro_bias_walk", self.gyro_bias_walk, "[rad/s/sqrt(s)]")
         check_non_negative(owner, "accel_bias_walk", self.accel_bias_walk, "[m/s^2/sqrt(s)]")
+        check_finite(owner, "gyro_bias", self.gyro_bias, "[rad/s]")
+        bias = check_pair(owner, "accel_bias", self.accel_bias, "(x, y) [m/s^2]")
+        object.__setattr__(self, "accel_bias", bias)
+        check_non_negative(owner, "noise_scale", self.noise_scale, "[-]")
 
     @property
     def gyro_sigma(self) -> float:
@@ -98,7 +111,7 @@ class ImuSensor:
 
     def __init__(self, config: ImuConfig, seed: int) -> None:
         self.config = config
-        self._sigma_cache: tuple[ImuConfig, float, float] | None = None
+        self._sigma_cache: tuple[ImuConfig, float, float, float, float] | None = None
         self.reset(seed)
 
     def reset(self, seed: int) -> None:
@@ -122,13 +135,15 @@ class ImuSensor:
         acc[2] += truth.accel_y
         self._count += 1
 
-    def _sigmas(self) -> tuple[float, float]:
-        """(gyro, accel) white-noise std of the current config, worked out once per config."""
+    def _sigmas(self) -> tuple[float, float, float, float]:
+        """(gyro, accel) white-noise std stated, then drawn (times ``noise_scale``),
+        of the current config, worked out once per config."""
         cfg = self.config
         cached = self._sigma_cache
         if cached is None or cached[0] is not cfg:
-            cached = self._sigma_cache = (cfg, cfg.gyro_sigma, cfg.accel_sigma)
-        return cached[1], cached[2]
+            sg, sa, scale = cfg.gyro_sigma, cfg.accel_sigma, cfg.noise_scale
+            cached = self._sigma_cache = (cfg, sg, sa, scale * sg, scale * sa)
+        return cached[1], cached[2], cached[3], cached[4]
 
     def capture(self, truth: TruthSample) -> Imu:
         """The IMU sample of a capture at ``truth.t``: the mean since the last one."""
@@ -145,14 +160,14 @@ class ImuSensor:
         self._last_t = t
         bg = self._gyro_bias.step(dt).tolist()[0]
         ba0, ba1 = self._accel_bias.step(dt).tolist()
-        sg, sa = self._sigmas()
+        sg, sa, dg, da = self._sigmas()
         wg = float(self._gyro_white.standard_normal())
         wa0, wa1 = self._accel_white.standard_normal(2).tolist()
-        return Imu(
-            Header(t, FRAME_GPS_ANTENNA),
-            yaw_rate + bg + sg * wg,
-            accel_x + ba0 + sa * wa0,
-            accel_y + ba1 + sa * wa1,
-            sg * sg,
-            sa * sa,
-        )
+        gyro = yaw_rate + bg + dg * wg
+        ax, ay = accel_x + ba0 + da * wa0, accel_y + ba1 + da * wa1
+        cfg = self.config
+        if cfg.gyro_bias != 0.0:  # without one, the sum itself (bit for bit)
+            gyro += cfg.gyro_bias
+        if cfg.accel_bias != (0.0, 0.0):
+            ax, ay = ax + cfg.accel_bias[0], ay + cfg.accel_bias[1]
+        return Imu(Header(t, FRAME_GPS_ANTENNA), gyro, ax, ay, sg * sg, sa * sa)

@@ -14,6 +14,12 @@ def _fail(owner: str, field: str, value: object, allowed: str) -> ValueError:
     return ValueError(f"{owner}.{field} = {value!r} is out of range: allowed {allowed}")
 
 
+def check_finite(owner: str, field: str, value: float, unit: str = "") -> None:
+    """Require a finite value (of either sign)."""
+    if not math.isfinite(value):
+        raise _fail(owner, field, value, f"(-inf, inf) {unit}".rstrip())
+
+
 def check_positive(owner: str, field: str, value: float, unit: str = "") -> None:
     """Require a finite value > 0."""
     if not (math.isfinite(value) and value > 0.0):
@@ -44,3 +50,16 @@ def check_choice(owner: str, field: str, value: str, allowed: tuple[str, ...]) -
     """Require one of the listed names."""
     if value not in allowed:
         raise _fail(owner, field, value, f"one of {allowed}")
+
+
+def check_pair(owner: str, field: str, value: object, unit: str) -> tuple[float, float]:
+    """Require two finite numbers, e.g. an (east, north) rate; returns them as a tuple.
+
+    A list (from YAML) is accepted and returned as the tuple a frozen config keeps.
+    """
+    pair = tuple(value) if isinstance(value, tuple | list) else (value,)
+    if len(pair) != 2:
+        raise _fail(owner, field, value, f"a pair of finite numbers {unit}".rstrip())
+    for i, v in enumerate(pair):
+        check_finite(owner, f"{field}[{i}]", v, unit)
+    return float(pair[0]), float(pair[1])

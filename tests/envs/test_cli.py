@@ -15,7 +15,7 @@ import pytest
 from matplotlib.figure import Figure
 
 from conesim.core.geodesy import GeodesyError
-from conesim.envs import cli, runner
+from conesim.envs import cli, runner, scenario
 from conesim.envs.cli import build_parser, format_result, main
 from conesim.envs.runner import RunResult
 from conesim.tracks import Track, load_track
@@ -366,7 +366,7 @@ def test_run_world_build_failure_names_the_track(
     def unbuildable(*args: object, **kwargs: object) -> None:
         raise GeodesyError("local_cartesian_to_gps: longitude out of range [-180, 180] deg: 1e4")
 
-    monkeypatch.setattr(runner, "ClosedLoop", unbuildable)
+    monkeypatch.setattr(scenario, "ClosedLoop", unbuildable)
     path = tmp_path / "fssim.yaml"
     write_fssim(path)
     out_dir = tmp_path / "run"

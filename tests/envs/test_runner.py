@@ -7,7 +7,7 @@ from typing import Any
 
 import pytest
 
-from conesim.envs import runner
+from conesim.envs import runner, scenario
 from conesim.envs.runner import TIMING_FIELDS, run_scenario
 
 
@@ -29,7 +29,7 @@ def test_setup_is_timed_apart_from_the_loop(monkeypatch: pytest.MonkeyPatch) -> 
     (the planner's) is setup_time_s, not part of the loop's wall time: a loop
     that takes 0.3 s and an autopilot that takes 0.5 s to build add 0.8 s."""
 
-    class SlowLoop(runner.ClosedLoop):
+    class SlowLoop(scenario.ClosedLoop):
         def __init__(self, *args: Any, **kwargs: Any) -> None:
             time.sleep(0.3)
             super().__init__(*args, **kwargs)
@@ -39,7 +39,7 @@ def test_setup_is_timed_apart_from_the_loop(monkeypatch: pytest.MonkeyPatch) -> 
             time.sleep(0.5)
             super().__init__(*args, **kwargs)
 
-    monkeypatch.setattr(runner, "ClosedLoop", SlowLoop)
+    monkeypatch.setattr(scenario, "ClosedLoop", SlowLoop)
     monkeypatch.setattr(runner, "Autopilot", SlowAutopilot)
     result = run_scenario("acceleration", time_limit=0.5)
     assert result.setup_time_s >= 0.8

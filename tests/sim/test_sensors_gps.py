@@ -137,3 +137,16 @@ def test_default_origin_used() -> None:
     assert_allclose(
         [fix.latitude, fix.longitude], [DEFAULT_ORIGIN.lat_deg, DEFAULT_ORIGIN.lon_deg], atol=1e-12
     )
+
+
+def test_bias_drift_grows_at_its_rate_from_its_start() -> None:
+    """No noise, drift (0.2, 0.1) m/s from 1 s, 10 Hz: the error is 0 up to 1 s,
+    then rate * (t - 1 s): (0.2, 0.1) m at 2 s, (1.8, 0.9) m at 10 s."""
+    cfg = GpsConfig(white_sigma=0.0, drift_rate=(0.2, 0.1), drift_start=1.0)
+    err = fix_errors(cfg, 101)
+    t = np.arange(101) / cfg.rate
+    assert_allclose(err[t <= 1.0], 0.0, atol=1e-6)
+    assert_allclose(err[20], [0.2, 0.1], atol=1e-6)
+    assert_allclose(err[100], [1.8, 0.9], atol=1e-6)
+    assert_allclose(fix_errors(replace(cfg, white_sigma=0.05), 101, seed=4)[:10],
+                    fix_errors(GpsConfig(white_sigma=0.05), 101, seed=4)[:10])  # fmt: skip

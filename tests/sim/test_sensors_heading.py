@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 from numpy.testing import assert_allclose
@@ -51,3 +52,16 @@ def test_consumer_heading_bias_and_stated_variance() -> None:
     # (a white heading with the same total would give 10 deg^2).
     step_ms = np.mean(np.diff(np.degrees(err)) ** 2)
     assert_allclose(step_ms, 2.0133, rtol=0.1)  # SE 2.6 %
+
+
+def test_dropout_publishes_nothing_and_changes_no_other_heading() -> None:
+    """A window (1 s, 0.5 s) at 20 Hz: the 10 captures stamped in [1, 1.5) give
+    nothing; every other heading is the one without the window."""
+    cfg = get_profile("rtk").heading
+    clean, faulty = HeadingSensor(cfg, 2), HeadingSensor(replace(cfg, dropouts=((1.0, 0.5),)), 2)
+    pose = Pose2D(0.0, 0.0, 0.3)
+    pairs = [(clean.capture(TruthSample(k / 20, pose)), faulty.capture(TruthSample(k / 20, pose)))
+             for k in range(60)]  # fmt: skip
+    lost = [k for k, (_, m) in enumerate(pairs) if m is None]
+    assert lost == list(range(20, 30))
+    assert all(m == c for c, m in pairs if m is not None)

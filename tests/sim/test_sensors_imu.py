@@ -90,3 +90,21 @@ def test_integrating_imu_reports_the_interval_mean() -> None:
     imu.observe(TruthSample(0.020, pose, yaw_rate=7.0))
     msg = imu.capture(TruthSample(0.020, pose, yaw_rate=7.0))
     assert msg.yaw_rate == 6.0  # only the steps since the last capture
+
+
+def test_constant_bias_adds_to_every_sample() -> None:
+    """White noise and walks off, gyro bias 0.02 rad/s, accel bias (0.3, -0.2) m/s^2:
+    every error is exactly the bias."""
+    cfg = ImuConfig(gyro_noise_density=0.0, accel_noise_density=0.0, gyro_bias=0.02,
+                    accel_bias=(0.3, -0.2))  # fmt: skip
+    assert_allclose(imu_errors(cfg, 100), np.tile([0.02, 0.3, -0.2], (100, 1)), atol=1e-12)
+
+
+def test_noise_scale_widens_the_noise_not_the_stated_variance() -> None:
+    """ADIS16448 at 100 Hz times 3: 0.405 deg/s gyro spread (5 % over 20,000), the
+    message still states (0.135 deg/s)^2; scale 1 is the plain sensor bit for bit."""
+    err = imu_errors(ImuConfig(noise_scale=3.0), 20_000)
+    assert_allclose(err[:, 0].std(), 3 * math.radians(0.135), rtol=0.05)
+    m = ImuSensor(ImuConfig(noise_scale=3.0), 0).capture(TruthSample(0.0, Pose2D(0, 0, 0)))
+    assert_allclose(m.yaw_rate_variance, math.radians(0.135) ** 2, rtol=1e-12)
+    assert np.array_equal(imu_errors(ImuConfig(noise_scale=1.0), 50), imu_errors(ImuConfig(), 50))

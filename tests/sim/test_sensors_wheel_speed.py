@@ -45,3 +45,15 @@ def test_reset_draws_a_new_scale_reproducibly() -> None:
     sensor = WheelSpeedSensor(cfg, 1)
     sensor.reset(2)
     assert sensor.scale == WheelSpeedSensor(cfg, 2).scale != WheelSpeedSensor(cfg, 1).scale
+
+
+def test_slip_noise_is_a_share_of_the_speed_and_not_stated() -> None:
+    """Slip 0.02 at 15 m/s: 0.3 m/s spread over 20,000 samples (chi-square, 4 sigma:
+    2 %), none at rest, the stated variance the encoder's alone."""
+    cfg = WheelSpeedConfig(white_sigma=0.0, scale_sigma=0.0, slip_sigma=0.02)
+    sensor = WheelSpeedSensor(cfg, 0)
+    v = np.array([sensor.capture(TruthSample(k / 50, Pose2D(0, 0, 0), speed=15.0)).speed
+                  for k in range(20_000)])  # fmt: skip
+    assert_allclose(v.std(), 0.3, rtol=0.02)
+    at_rest = sensor.capture(TruthSample(400.0, Pose2D(0, 0, 0), speed=0.0))
+    assert at_rest.speed == 0.0 and at_rest.variance == 0.0
