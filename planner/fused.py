@@ -28,9 +28,8 @@ that tests can call alone.
 
 The arguments are plain arrays and scalars (``kernels``' conventions); the
 callers are in ``midline``. Compiled with numba's on-disk cache like
-``kernels`` (``localization.compiled.cached_njit``); numba checks each cached
-function against its own file only, so after editing a step kernel that a
-function here calls, run ``make clean-cache``.
+``kernels`` (``conesim.core.compiled.cached_njit``), which follows edits of
+the step kernels too.
 """
 
 from __future__ import annotations

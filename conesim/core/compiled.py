@@ -1,14 +1,18 @@
-"""numba's ``njit`` with an on-disk cache where one can be written, shared by the kernel modules.
+"""numba's ``njit`` with an on-disk cache that is never stale, shared by the kernel modules.
 
-The modules of ``planner.kernels``, ``planner.fused`` and
-``localization.ekf.kernels`` compile with ``cache=True``: later processes load
-the machine code instead of compiling it again (seconds). numba looks for a
-cache directory beside the kernel's source file, then under
-``NUMBA_CACHE_DIR`` or the user's cache directory; with none writable,
-``njit(cache=True)`` raises when it decorates. :func:`cached_njit` asks first,
-with a do-nothing function from the kernel module itself (the directory
-depends on its file), and falls back to compiling in every process, with one
-warning per module, instead of failing to import.
+The kernel modules (``planner.kernels``, ``planner.fused``,
+``localization.ekf.kernels``) decorate their kernels with
+``cached_njit(_probe, "<module>")``. Compiled machine code is cached on disk
+(beside the module's file, else under ``NUMBA_CACHE_DIR`` or the user's
+cache directory) and filed under a digest of the kernel's code and of all
+the code and constants it reaches, in any file
+(:mod:`conesim.core.kernel_cache`, :mod:`conesim.core.kernel_digest`): after
+an edit, a process loads only code compiled from the code it imported; no
+cache needs clearing. With no writable cache directory (numba would raise
+when decorating), the probe, a do-nothing function of the kernel module
+(the directory depends on its file), finds out first: the module's kernels
+then compile in every process, with one warning per module, instead of
+failing to import.
 """
 
 from __future__ import annotations
@@ -18,18 +22,26 @@ from collections.abc import Callable
 from typing import Any
 
 from numba import njit
+from numba.extending import is_jitted
+
+from conesim.core import kernel_cache
+
+_packages: set[str] = set()
+"""The kernel modules' top-level packages, followed by the digest."""
 
 
-def cached_njit(probe: Callable[[], None], owner: str) -> Any:
-    """``njit(cache=True)`` if numba can cache ``probe``'s module, else ``njit()`` and a warning.
+def cached_njit(probe: Callable[[], None], owner: str) -> Callable[[Any], Any]:
+    """The decorator for the kernels of module ``owner``: ``njit`` with the cache above.
 
     Args:
         probe: a do-nothing function defined in the kernel module.
-        owner: the module's name, for the warning.
+        owner: the module's name (its top-level package is followed by the digest).
 
     Returns:
-        The decorator for the module's kernels.
+        The decorator, or ``njit(cache=False)`` with a warning when numba
+        can cache nothing from the module's directory.
     """
+    _packages.add(owner.split(".", maxsplit=1)[0])
     try:
         njit(cache=True)(probe)
     except RuntimeError:
@@ -40,4 +52,16 @@ def cached_njit(probe: Callable[[], None], owner: str) -> Any:
             stacklevel=2,
         )
         return njit(cache=False)
-    return njit(cache=True)
+    return _cached
+
+
+def _cached(func: Callable[..., Any]) -> Any:
+    dispatcher = njit(cache=False)(func)
+    if not is_jitted(dispatcher):  # NUMBA_DISABLE_JIT
+        return dispatcher
+    cache = kernel_cache.DependencyCache(func, _packages, _on_miss)
+    return kernel_cache.install(dispatcher, cache)
+
+
+def _on_miss(retry: Callable[[], Any]) -> None:
+    """A cache miss: numba compiles."""
