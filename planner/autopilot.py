@@ -46,6 +46,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
+from conesim.core.compiled import parallel_warm_up
 from conesim.core.messages import (
     FRAME_OS_SENSOR,
     FRAME_REFERENCE,
@@ -79,6 +80,7 @@ _TIME_EPS = 1e-9  # [s] tolerance of the control schedule
 
 
 @functools.cache
+@parallel_warm_up
 def warm_up_planner() -> None:
     """One planning step on a made-up gentle bend, once per process.
 

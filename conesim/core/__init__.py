@@ -5,7 +5,8 @@
 - ``pose``: ``Pose2D`` and ``wrap_angle``.
 - ``geodesy``: the reference origin and the seed's GPS-to-local projection.
 - ``compiled``: numba's ``njit`` with the on-disk cache the kernels share,
-  keyed by ``kernel_digest``'s digest of the code they reach (``kernel_cache``).
+  keyed by ``kernel_digest``'s digest of the code they reach (``kernel_cache``),
+  and cold compiles shared among helper processes (``kernel_workers``).
 
 These modules import nothing else of conesim, as every ROS node shares
 ``geometry_msgs`` and ``sensor_msgs`` without depending on other nodes.

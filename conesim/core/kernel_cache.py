@@ -12,8 +12,9 @@ taken at the kernel's first load, when every global it names is bound.
 
 Reading and writing an index take a lock on the cache directory (shared,
 exclusive): numba writes a new index before the data file it names, and two
-processes saving entries of one index at once (two runs started together, say)
-can lose or swap entries.
+processes saving entries of one index at once (two runs started together, or
+the helpers of :func:`conesim.core.compiled.parallel_warm_up`) can lose or
+swap entries.
 
 numba internals relied on (numba is pinned to 0.68.x in pyproject.toml;
 ``tests/core/test_kernel_cache.py`` checks each of them, and fails loudly if
@@ -108,6 +109,17 @@ class DependencyCache(FunctionCache):
             yield
         finally:
             os.close(fd)  # releases the lock
+
+
+class AnnouncingNullCache(NullCache):
+    """``NullCache`` (no cache directory): every load misses, and says so to ``on_miss``."""
+
+    def __init__(self, on_miss: OnMiss) -> None:
+        self._on_miss = on_miss
+
+    def load_overload(self, sig: Any, target_context: Any) -> Any:
+        """None, after telling ``on_miss``."""
+        return self._on_miss(lambda: None)
 
 
 def install(dispatcher: Any, cache: FunctionCache | NullCache) -> Any:

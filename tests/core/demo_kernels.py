@@ -3,7 +3,7 @@
 ``ckdemo`` has the shapes that went stale under numba's own cache: a kernel
 (``chain``) calling a kernel of another file (``step.step``), which calls a
 helper of a third (``common.offset``), and reading a constant of a plain
-module (``consts.SCALE``).
+module (``consts.SCALE``); plus a warm-up for :func:`parallel_warm_up`.
 ``chain(3.0)`` is ``(3 + OFFSET) * 3 * SCALE``.
 """
 
@@ -43,12 +43,22 @@ FILES = {
         + PROBE
         + "\n\n@_compiled\ndef chain(x):\n    return step.step(x) * consts.SCALE\n"
     ),
+    "warm.py": (
+        "from conesim.core.compiled import parallel_warm_up\n"
+        "from ckdemo import chain, common\n\n\n"
+        "@parallel_warm_up\n"
+        "def warm_up():\n"
+        "    chain.chain(3.0)\n"
+        "    common.offset(1.0)\n"
+    ),
 }
 
 RUN = """
 import json, sys
 sys.path.insert(0, {root!r})
-from ckdemo import chain, common
+from conesim.core import compiled
+compiled._cores = lambda: {cores}  # helpers whatever this machine has
+from ckdemo import chain, common, warm
 {action}
 stats = {{name: f.stats for name, f in (("chain", chain.chain), ("offset", common.offset))}}
 print(json.dumps({{
@@ -75,10 +85,10 @@ def edit(path: Path, old: str, new: str) -> None:
     path.write_text(text.replace(old, new))
 
 
-def run(root: Path, action: str = "", **env: str) -> tuple[dict[str, Any], str]:
+def run(root: Path, action: str = "", cores: int = 1, **env: str) -> tuple[dict[str, Any], str]:
     """In a fresh process: ``action``, then ``chain(3.0)``; (value, hits and misses of
     ``chain`` and ``offset`` in that process; its stderr)."""
-    script = RUN.format(root=str(root), action=action)
+    script = RUN.format(root=str(root), cores=cores, action=action)
     done = subprocess.run(
         [sys.executable, "-c", script],
         capture_output=True,
