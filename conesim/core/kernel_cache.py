@@ -49,8 +49,8 @@ except ImportError:  # not POSIX: no lock (numba's own behaviour)
 LOCK_NAME = "conesim-kernels.lock"
 """The lock file in each cache directory."""
 
-OnMiss = Callable[[Callable[[], Any]], Any]
-"""Called on a cache miss with a function that retries the load; returns its result or None."""
+OnMiss = Callable[[], None]
+"""Called on a cache miss, before numba compiles (it may raise to stop the compile)."""
 
 
 class DependencyCache(FunctionCache):
@@ -59,7 +59,7 @@ class DependencyCache(FunctionCache):
     Args:
         py_func: the kernel's Python function.
         packages: the top-level packages the digest follows (read at the first load).
-        on_miss: called when the cache has no entry for a signature (see :data:`OnMiss`).
+        on_miss: called when the cache has no entry for a signature.
     """
 
     def __init__(self, py_func: Callable[..., Any], packages: Set[str], on_miss: OnMiss) -> None:
@@ -71,13 +71,11 @@ class DependencyCache(FunctionCache):
     def load_overload(self, sig: Any, target_context: Any) -> Any:
         """The cached compile result for ``sig``, or None: numba compiles it then."""
         self._stamp()
-
-        def load() -> Any:
-            with self._locked(exclusive=False):
-                return super(DependencyCache, self).load_overload(sig, target_context)
-
-        data = load()
-        return data if data is not None else self._on_miss(load)
+        with self._locked(exclusive=False):
+            data = super().load_overload(sig, target_context)
+        if data is None:
+            self._on_miss()
+        return data
 
     def save_overload(self, sig: Any, data: Any) -> None:
         """Save the compile result for ``sig`` under the digest."""
@@ -119,7 +117,7 @@ class AnnouncingNullCache(NullCache):
 
     def load_overload(self, sig: Any, target_context: Any) -> Any:
         """None, after telling ``on_miss``."""
-        return self._on_miss(lambda: None)
+        self._on_miss()
 
 
 def install(dispatcher: Any, cache: FunctionCache | NullCache) -> Any:

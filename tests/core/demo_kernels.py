@@ -57,7 +57,7 @@ RUN = """
 import json, sys
 sys.path.insert(0, {root!r})
 from conesim.core import compiled
-compiled._cores = lambda: {cores}  # helpers whatever this machine has
+compiled._cores = lambda: {cores}  # as if the machine had that many
 from ckdemo import chain, common, warm
 {action}
 stats = {{name: f.stats for name, f in (("chain", chain.chain), ("offset", common.offset))}}
@@ -88,18 +88,24 @@ def edit(path: Path, old: str, new: str) -> None:
 def run(root: Path, action: str = "", cores: int = 1, **env: str) -> tuple[dict[str, Any], str]:
     """In a fresh process: ``action``, then ``chain(3.0)``; (value, hits and misses of
     ``chain`` and ``offset`` in that process; its stderr)."""
-    script = RUN.format(root=str(root), cores=cores, action=action)
+    done = python(RUN.format(root=str(root), cores=cores, action=action), **env)
+    return json.loads(done.stdout.strip().splitlines()[-1]), done.stderr
+
+
+def python(script: str, **env: str) -> subprocess.CompletedProcess[str]:
+    """Run ``script`` in a fresh Python from the repository, without the caller's ``NUMBA_*``
+    settings but with ``env``; it must succeed."""
     done = subprocess.run(
         [sys.executable, "-c", script],
         capture_output=True,
         text=True,
         check=False,
-        timeout=600,
+        timeout=900,
         cwd=REPO,
         env={**{k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}, **env},
     )
     assert done.returncode == 0, done.stdout + done.stderr
-    return json.loads(done.stdout.strip().splitlines()[-1]), done.stderr
+    return done
 
 
 def cache_files(package: Path, pattern: str) -> list[Path]:

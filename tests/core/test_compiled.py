@@ -3,14 +3,12 @@ processes on a temporary kernel package (and once on the planner's own warm-up).
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from conesim.core import compiled
-from tests.core.demo_kernels import REPO, edit, run, write_package
+from tests.core.demo_kernels import edit, python, run, write_package
 
 
 def notice(cores: int = 1, *, cached: bool = True) -> str:
@@ -44,38 +42,45 @@ def test_the_notice_without_a_cache_directory(tmp_path: Path) -> None:
     )
     script = blocked + "\n" + f"import sys; sys.path.insert(0, {str(tmp_path)!r})\n"
     script += "from ckdemo import chain, common\nchain.chain(3.0); " + action + "\n"
-    done = subprocess.run(
-        [sys.executable, "-c", script], capture_output=True, text=True, check=True, cwd=REPO
-    )
-    lines = done.stderr.splitlines()
+    lines = python(script).stderr.splitlines()
     assert notice(cached=False) in lines
     assert lines.count(notice(cached=False)) == 1
     assert sum("no writable cache directory" in line for line in lines) >= 3
 
 
-def test_a_cold_parallel_warm_up_is_compiled_by_helpers(tmp_path: Path) -> None:
-    """With two cores, the warm-up's first miss starts helpers that compile every kernel it
-    calls: the warm-up itself then only loads (no misses). Warm, no helper, no notice."""
+SKIP_OWN_SHARE = (
+    "from conesim.core import kernel_workers\n"
+    "kernel_workers._compile_claimed = lambda calls, claims: True  # all to the helpers\n"
+)
+"""Leaves every kernel of a parallel warm-up to the helpers (this process compiles none)."""
+
+
+def test_a_cold_parallel_warm_up_compiles_then_loads(tmp_path: Path) -> None:
+    """Two cores, cold: the right value and one notice; warm again: loaded, no notice."""
     write_package(tmp_path)
     cold, err = run(tmp_path, "warm.warm_up()", cores=2)
     assert cold["value"] == 24.0
-    assert cold["misses"] == {"chain": 0, "offset": 0}
-    assert cold["hits"] == {"chain": 1, "offset": 1}
     assert err.splitlines() == [notice(2)]
     warm, err = run(tmp_path, "warm.warm_up()", cores=2)
-    assert warm == cold
+    assert warm["value"] == 24.0
+    assert warm["misses"] == {"chain": 0, "offset": 0}
     assert err == ""
 
 
-def test_after_an_edit_the_helpers_compile_what_changed(tmp_path: Path) -> None:
-    """An edited callee: the helpers compile the kernels that reach it; the value is new."""
+def test_the_helpers_compile_every_kernel_the_warm_up_calls(tmp_path: Path) -> None:
+    """With this process's share left to them, the helpers compile every kernel the
+    warm-up calls (as Python, for its types): run again, the warm-up only loads. After an
+    edit of a callee, likewise, and the value is the new one."""
     package = write_package(tmp_path)
-    run(tmp_path, "warm.warm_up()", cores=2)
-    edit(package / "common.py", "x + 1.0", "x + 2.0")
-    edited, err = run(tmp_path, "warm.warm_up()", cores=2)
-    assert edited["value"] == (3.0 + 2.0) * 3.0 * 2.0
-    assert edited["misses"] == {"chain": 0, "offset": 0}
+    cold, err = run(tmp_path, SKIP_OWN_SHARE + "warm.warm_up()", cores=2)
+    assert cold["misses"] == {"chain": 0, "offset": 0}
+    assert cold["hits"] == {"chain": 1, "offset": 1}
+    assert cold["value"] == 24.0
     assert err.splitlines() == [notice(2)]
+    edit(package / "common.py", "x + 1.0", "x + 2.0")
+    edited, _ = run(tmp_path, SKIP_OWN_SHARE + "warm.warm_up()", cores=2)
+    assert edited["misses"] == {"chain": 0, "offset": 0}
+    assert edited["value"] == (3.0 + 2.0) * 3.0 * 2.0
 
 
 def test_one_core_compiles_in_the_process(tmp_path: Path) -> None:
@@ -86,11 +91,13 @@ def test_one_core_compiles_in_the_process(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
-def test_the_planners_cold_warm_up_is_compiled_by_helpers(tmp_path: Path) -> None:
-    """The planner's warm-up from a cold cache (its own ``NUMBA_CACHE_DIR``): the helpers'
-    interpreted run calls the kernels with the types the compiled warm-up uses, so the
-    warm-up loads every kernel and compiles none; one notice."""
-    script = """
+def test_the_planners_cold_warm_up_is_compiled_by_the_helpers(tmp_path: Path) -> None:
+    """The planner's warm-up from a cold cache (its own ``NUMBA_CACHE_DIR``), all left to
+    the helpers: the warm-up run as Python calls the kernels with the types the compiled
+    warm-up uses, so the warm-up then loads every kernel and compiles none; one notice."""
+    script = (
+        SKIP_OWN_SHARE
+        + """
 import importlib, pkgutil
 from conesim.core import compiled
 compiled._cores = lambda: 2
@@ -107,16 +114,7 @@ assert not misses, misses
 assert hits >= 9, hits
 print("ok")
 """
-    env = {"NUMBA_CACHE_DIR": str(tmp_path / "cache"), "PATH": "/usr/bin:/bin"}
-    done = subprocess.run(
-        [sys.executable, "-c", script],
-        capture_output=True,
-        text=True,
-        check=False,
-        timeout=900,
-        cwd=REPO,
-        env=env,
     )
-    assert done.returncode == 0, done.stdout + done.stderr
+    done = python(script, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
     assert done.stdout.strip() == "ok"
     assert done.stderr.splitlines() == [notice(2)]
