@@ -49,8 +49,8 @@ MAX_HELPERS = 3
 HELPER_TIMEOUT_S = 1800.0
 """Seconds the helpers get; any still running then are killed (the warm-up compiles the rest)."""
 
-COLD_SECONDS = {1: 30, 2: 16}
-"""About how long compiling all the kernels takes, by processes compiling (said in the notice)."""
+COLD_SECONDS = {1: 27, 2: 16}
+"""About how long a cold ``conesim run`` sets up, by idle cores (said in the notice)."""
 
 _F = TypeVar("_F", bound=Callable[..., object])
 
@@ -139,13 +139,13 @@ def notice(*, cached: bool = True) -> str:
     if not cached:
         return (
             "conesim: compiling the numba kernels (no writable cache directory, so in every "
-            f"run: set NUMBA_CACHE_DIR; about {COLD_SECONDS[1]} s) ..."
+            f"run: set NUMBA_CACHE_DIR; about {COLD_SECONDS[1]} s on an idle core) ..."
         )
     cores = _cores()
-    on = f"{cores} cores" if cores > 1 else "1 core"
+    on = f"{cores} idle cores" if cores > 1 else "1 idle core"
     return (
         "conesim: compiling the numba kernels (first run after an install or an edit; "
-        f"up to about {COLD_SECONDS[min(cores, 2)]} s on {on}) ..."
+        f"about {COLD_SECONDS[min(cores, max(COLD_SECONDS))]} s on {on}) ..."
     )
 
 
