@@ -33,6 +33,7 @@ import dataclasses
 import functools
 import os
 import sys
+import time
 import warnings
 import weakref
 from collections.abc import Callable
@@ -62,9 +63,11 @@ class _ColdCache(BaseException):
 
 @dataclasses.dataclass
 class _WarmUp:
-    """A running :func:`parallel_warm_up`; ``stopped`` once it has raised :class:`_ColdCache`."""
+    """A running :func:`parallel_warm_up`: ``stopped`` at its first miss, with ``helpers``
+    (0: it goes on compiling by itself)."""
 
     stopped: bool = False
+    helpers: int = 0
 
 
 @dataclasses.dataclass
@@ -110,24 +113,24 @@ def parallel_warm_up(func: _F) -> _F:
     seconds in one process; helpers use the other cores. ``func`` must be
     safe to run more than once: on a cold cache it is stopped at its first
     miss, runs as Python, and runs again. A warm cache costs nothing extra,
-    and neither does one core: there it just runs.
+    and neither do busy cores: where fewer than two are idle (other work
+    holds them) it just runs, as helpers would only add their start-up.
     """
 
     @functools.wraps(func)
     def warm_up(*args: Any, **kwargs: Any) -> object:
         if _state.warm_up is not None or kernel_workers.discovering() or _cores() < 2:
             return func(*args, **kwargs)
-        _state.warm_up = _WarmUp()
+        warm_up = _state.warm_up = _WarmUp()
         try:
             return func(*args, **kwargs)
         except _ColdCache:
             pass
         finally:
             _state.warm_up = None
-        helpers = min(_cores() - 1, MAX_HELPERS)
         run = functools.partial(func, *args, **kwargs)
         kernel_workers.compile_in_parallel(
-            run, _state.kernels, _state.packages, helpers, HELPER_TIMEOUT_S
+            run, _state.kernels, _state.packages, warm_up.helpers, HELPER_TIMEOUT_S
         )
         return func(*args, **kwargs)
 
@@ -177,7 +180,10 @@ def _on_miss() -> None:
     warm_up = _state.warm_up
     if warm_up is not None and not warm_up.stopped:
         warm_up.stopped = True
-        raise _ColdCache
+        # One helper per idle core beyond this process's; 1.6 idle cores give one.
+        warm_up.helpers = min(_cores() - 1, MAX_HELPERS, int(_idle_cores() - 0.6))
+        if warm_up.helpers > 0:
+            raise _ColdCache
 
 
 def _announce(*, cached: bool) -> None:
@@ -193,3 +199,26 @@ def _cores() -> int:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # not Linux
         return os.cpu_count() or 1
+
+
+def _idle_cores() -> float:
+    """Cores idle over a fifth of a second (Linux: /proc/stat); elsewhere all of them."""
+    try:
+        before = _cpu_times()
+        time.sleep(0.2)
+        after = _cpu_times()
+    except (OSError, ValueError, IndexError):
+        return float(_cores())
+    total = sum(after) - sum(before)
+    idle = (after[3] + after[4]) - (before[3] + before[4])  # idle, iowait
+    cpus = os.cpu_count() or 1
+    return cpus * idle / total if total > 0 else float(_cores())
+
+
+def _cpu_times() -> list[int]:
+    """The first line of /proc/stat: user, nice, system, idle, iowait, ... (clock ticks)."""
+    with open("/proc/stat", encoding="ascii") as stat:
+        fields = stat.readline().split()
+    if fields[0] != "cpu":
+        raise ValueError(fields[0])
+    return [int(v) for v in fields[1:]]

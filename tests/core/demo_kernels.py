@@ -57,7 +57,7 @@ RUN = """
 import json, sys
 sys.path.insert(0, {root!r})
 from conesim.core import compiled
-compiled._cores = lambda: {cores}  # as if the machine had that many
+compiled._cores = compiled._idle_cores = lambda: {cores}  # as if it had that many
 from ckdemo import chain, common, warm
 {action}
 stats = {{name: f.stats for name, f in (("chain", chain.chain), ("offset", common.offset))}}

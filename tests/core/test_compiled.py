@@ -83,11 +83,18 @@ def test_the_helpers_compile_every_kernel_the_warm_up_calls(tmp_path: Path) -> N
     assert edited["value"] == (3.0 + 2.0) * 3.0 * 2.0
 
 
-def test_one_core_compiles_in_the_process(tmp_path: Path) -> None:
-    """One core: no helpers; the warm-up compiles its kernels itself."""
+def test_one_core_or_busy_cores_compile_in_the_process(tmp_path: Path) -> None:
+    """One core, or two with only one idle (other work on the other): no helpers; the
+    warm-up goes on and compiles its kernels itself."""
     write_package(tmp_path)
     cold, _ = run(tmp_path, "warm.warm_up()", cores=1)
     assert cold["misses"] == {"chain": 1, "offset": 1}
+    busy = "compiled._idle_cores = lambda: 1.2\n"
+    edit(tmp_path / "ckdemo" / "common.py", "x + 1.0", "x + 2.0")
+    again, err = run(tmp_path, SKIP_OWN_SHARE + busy + "warm.warm_up()", cores=2)
+    assert again["misses"] == {"chain": 1, "offset": 1}
+    assert again["value"] == (3.0 + 2.0) * 3.0 * 2.0
+    assert err.splitlines() == [notice(2)]
 
 
 @pytest.mark.slow
@@ -100,7 +107,7 @@ def test_the_planners_cold_warm_up_is_compiled_by_the_helpers(tmp_path: Path) ->
         + """
 import importlib, pkgutil
 from conesim.core import compiled
-compiled._cores = lambda: 2
+compiled._cores = compiled._idle_cores = lambda: 2
 from conesim.planner import fused, kernels
 from conesim.planner.autopilot import warm_up_planner
 warm_up_planner()
