@@ -21,9 +21,10 @@ The kernel modules (``planner.kernels``, ``planner.fused``,
 - **Parallel cold compiles.** A warm-up decorated with :func:`parallel_warm_up`
   (the planner's) whose first call of a kernel misses the cache stops there,
   and has every kernel call it makes compiled into the cache by this process
-  and one helper process per further core (up to :data:`MAX_HELPERS`;
+  and one helper process per further idle core (up to :data:`MAX_HELPERS`;
   :mod:`conesim.core.kernel_workers`), then runs again, loading them. What
   the helpers did not provide it compiles itself, so the result is the same.
+  With no idle core for a helper it goes on compiling by itself.
 """
 
 from __future__ import annotations
