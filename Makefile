@@ -38,10 +38,9 @@ typecheck: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/write_results.py
 
-# numba's cached kernels: a cached kernel is checked against its own file only,
-# so after editing a kernel that another file's kernels call
-# (planner/kernels/_common.py, or a step kernel that planner/kernel_chains.py
-# chains), clear them; the next run compiles afresh.
+# Remove numba's cached kernels (the next run compiles them afresh). Never
+# needed after an edit: each kernel's cache is keyed by all the code it
+# reaches (conesim/core/kernel_cache.py); this only frees the space.
 clean-cache:
 	find conesim sim localization planner envs tracks -name __pycache__ -type d -prune -exec rm -rf {} +
 

@@ -25,9 +25,8 @@ localization), the global path, and the messages it receives.
 
 Building an autopilot runs one planning step on a made-up track
 (``warm_up_planner``), once per process: the planner's compiled kernels load
-there (from numba's cache, 0.2 s; compiled from a cold cache, about 12 s on
-the development machine, 30-45 s on a slower one) rather than on the first
-detection.
+there (from numba's cache; or compiled, on a cold cache) rather than on the
+first detection.
 
 Each :meth:`Autopilot.step` returns an :class:`AutopilotStep`: the command
 and what the step produced (the plans made from its detections, with their
@@ -50,6 +49,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from conesim.core.compiled import parallel_warm_up
 from conesim.core.messages import (
     FRAME_OS_SENSOR,
     FRAME_REFERENCE,
@@ -127,16 +127,17 @@ class AutopilotStep:
 
 
 @functools.cache
+@parallel_warm_up
 def warm_up_planner() -> None:
     """One planning step on a made-up gentle bend, once per process.
 
-    Each compiled kernel (``planner.kernels``) is loaded from numba's cache
-    (all of them: 0.2 s) or compiled (cold cache: about 12 s on the
-    development machine, 30-45 s on a slower one) on its first call.
-    Calling them here, when the autopilot is built, keeps that out of the
-    first detection's latency. The step has its own path, frame tree and
-    cones (a 3.5 m wide bend, cones every 2.5 m): no autopilot's state is
-    touched, and the kernels keep no state.
+    Each compiled kernel (``planner.kernels``) is loaded from numba's cache,
+    or compiled on a cold cache (``conesim.core.compiled``: with helper
+    processes on idle cores), on its first call. Calling them here, when the
+    autopilot is built, keeps that out of the first detection's latency. The
+    step has its own path, frame tree and cones (a 3.5 m wide bend, cones
+    every 2.5 m): no autopilot's state is touched, and the kernels keep no
+    state.
     """
     x = np.arange(0.0, 40.0, 0.5)
     centre = np.column_stack([x, 0.002 * x**2])

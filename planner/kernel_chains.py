@@ -28,9 +28,8 @@ are theirs, and each step stays a function that tests can call alone
 The arguments are arrays, scalars and the settings groups of
 ``planner.settings`` (``kernels``' conventions); the callers are in
 ``midline`` and ``geometry``. Compiled with numba's on-disk cache like
-``kernels`` (``conesim.core.compiled.cached_njit``); numba checks each cached
-function against its own file only, so after editing a step kernel that a
-function here calls, run ``make clean-cache``.
+``kernels`` (``conesim.core.compiled.cached_njit``), which follows edits of
+the step kernels too.
 """
 
 from __future__ import annotations

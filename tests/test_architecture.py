@@ -120,12 +120,20 @@ def test_the_rules_cover_every_package() -> None:
         assert (folder / "__init__.py").is_file(), package
 
 
+NUMBA_INTERNALS = {"conesim/core/kernel_cache.py"}
+"""The one module that reaches into numba's private attributes, on purpose: it
+keys numba's cache by the code a kernel reaches; numba is pinned, and
+tests/core/test_kernel_cache.py checks every internal it relies on."""
+
+
 def test_no_module_reads_another_objects_private_state() -> None:
     """``x._name`` only on ``self`` or ``cls``: adapters read what objects return
     or expose, never another object's private attributes."""
     bad = []
     for package in FOLDERS:
         for path in sources(package):
+            if path.relative_to(ROOT).as_posix() in NUMBA_INTERNALS:
+                continue
             tree = ast.parse(path.read_text(), filename=str(path))
             for node in ast.walk(tree):
                 private = (

@@ -7,7 +7,9 @@
 - ``polyline``: ``Polyline``, the one line type (stations, resampling,
   projection, curvature, crossings) of tracks, race control, the planner
   and the lap-time limit; ``projection``: ``Projection``, every projector's answer.
-- ``compiled``: numba's ``njit`` with the on-disk cache the kernels share.
+- ``compiled``: numba's ``njit`` with the on-disk cache the kernels share,
+  keyed by ``kernel_digest``'s digest of the code they reach (``kernel_cache``),
+  and cold compiles shared among helper processes (``kernel_workers``).
 
 These modules import nothing else of conesim, as every ROS node shares
 ``geometry_msgs`` and ``sensor_msgs`` without depending on other nodes.

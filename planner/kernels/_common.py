@@ -1,10 +1,9 @@
 """What the kernel modules share: the station axis' wrap of a difference, a mask's rows.
 
 Private to ``planner.kernels``: each helper is compiled once here and called
-from the kernels of several modules. numba's cache checks a cached kernel
-against its own source file only, so the callers' cached machine code keeps
-the old helper after an edit here: run ``make clean-cache`` (``planner.kernel_chains``,
-which chains the step kernels from another file, is in the same position).
+from the kernels of several modules. Their cached machine code follows an
+edit here (``conesim.core.kernel_cache`` keys each kernel's cache by all the
+code it reaches).
 """
 
 from __future__ import annotations
