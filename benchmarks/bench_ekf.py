@@ -37,24 +37,15 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.stats import chi2
 
-from conesim.core.messages import (
-    FRAME_GPS_ANTENNA,
-    FRAME_REFERENCE,
-    Header,
-    HeadingStamped,
-    Imu,
-    Message,
-    NavSatFix,
-    NavSatStatus,
-    WheelSpeed,
-)
+from conesim.core import messages as rosmsg
 from conesim.core.pose import Pose2D, wrap_angle
 from conesim.localization.ekf import EkfConfig, FusionEkf, RejectReason, for_profile
 from conesim.localization.ekf.synthetic import Path, SensorNoise, fix_message, make_truth, messages
 from conesim.localization.gps_to_local import gps_to_local_cartesian
 
 FloatArray = NDArray[np.float64]
-Tick = tuple[float, Pose2D, list[Message]]  # (time [s], true antenna pose, messages delivered)
+# (time [s], true antenna pose, messages delivered)
+Tick = tuple[float, Pose2D, list[rosmsg.Message]]
 TickSource = Callable[[str, int, "Faults"], Iterator[Tick]]
 
 GRID = 200.0  # [Hz] physics / truth grid
@@ -65,14 +56,15 @@ OUTLIER_THRESHOLD = 10.0  # [m] a fix this far from the truth is a multipath jum
 PROFILES = ("rtk", "consumer_white", "consumer", "ideal")
 DROPOUT = (15.0, 5.0)  # (start [s], duration [s])
 REPEATS = 5
+ANTENNA = rosmsg.FRAME_GPS_ANTENNA
 
 
 # -- (a) cost -----------------------------------------------------------------------------
 
 
-def _imu(t: float) -> Imu:
+def _imu(t: float) -> rosmsg.Imu:
     """An IMU sample of a car on a 10 m circle at 10 m/s."""
-    return Imu(Header(t, FRAME_GPS_ANTENNA), 1.0, 0.0, 10.0, 5.6e-6, 5.1e-4)
+    return rosmsg.Imu(rosmsg.Header(t, ANTENNA), 1.0, 0.0, 10.0, 5.6e-6, 5.1e-4)
 
 
 def _truth_circle(t: float) -> tuple[float, float, float]:
@@ -85,11 +77,12 @@ def _started_filter(t_end: float) -> FusionEkf:
     for k in range(round(t_end * 100) + 1):
         t = k / 100
         x, y, yaw = _truth_circle(t)
+        antenna, reference = rosmsg.Header(t, ANTENNA), rosmsg.Header(t, rosmsg.FRAME_REFERENCE)
         ekf.process(_imu(t))
         if k % 2 == 0:
-            ekf.process(WheelSpeed(Header(t, FRAME_GPS_ANTENNA), 10.0, 0.0025))
+            ekf.process(rosmsg.WheelSpeed(antenna, 10.0, 0.0025))
         if k % 5 == 0:
-            ekf.process(HeadingStamped(Header(t, FRAME_REFERENCE), yaw, 1.9e-5))
+            ekf.process(rosmsg.HeadingStamped(reference, yaw, 1.9e-5))
         if k % 10 == 0:
             ekf.process(fix_message(t, x, y, 0.025))
     return ekf
@@ -117,7 +110,7 @@ def bench_cost() -> dict[str, float]:
         samples = iter([_imu(1.0 + (k + 1) / 100) for k in range(n)])
         return lambda: ekf.process(next(samples))
 
-    def updates(msg: Message) -> Callable[[], Callable[[], object]]:
+    def updates(msg: rosmsg.Message) -> Callable[[], Callable[[], object]]:
         def setup() -> Callable[[], object]:
             ekf = _started_filter(1.0)
             ekf.process(_imu(1.01))  # the newest entry: no predict, no replay
@@ -127,7 +120,7 @@ def bench_cost() -> dict[str, float]:
 
     def late_fixes() -> Callable[[], object]:
         ekf = _started_filter(1.0)
-        stream: list[Message] = []
+        stream: list[rosmsg.Message] = []
         for k in range(1, n + 1):
             t = 1.0 + k / 100
             stream.append(_imu(t))
@@ -147,8 +140,8 @@ def bench_cost() -> dict[str, float]:
         stamps = iter([1.03 + k * 1e-6 for k in range(n)])  # a new stamp each call: no cache
         return lambda: ekf.estimate(next(stamps))
 
-    heading = HeadingStamped(Header(1.01, FRAME_REFERENCE), 1.01, 1e-2)
-    wheel = WheelSpeed(Header(1.01, FRAME_GPS_ANTENNA), 10.0, 1.0)
+    heading = rosmsg.HeadingStamped(rosmsg.Header(1.01, rosmsg.FRAME_REFERENCE), 1.01, 1e-2)
+    wheel = rosmsg.WheelSpeed(rosmsg.Header(1.01, rosmsg.FRAME_GPS_ANTENNA), 10.0, 1.0)
     x, y, _ = _truth_circle(1.01)
     fix = fix_message(1.01, x, y, 1.0)
     stream_calls = n + n // 10
@@ -273,7 +266,7 @@ def synthetic_ticks(profile: str, seed: int, faults: Faults) -> Iterator[Tick]:
     stream = messages(truth, SYNTHETIC_NOISE[profile], rng, outliers=outliers, gps_gap=gap)
     pending = next(stream, None)
     for k, t in enumerate(truth.t.tolist()):
-        delivered: list[Message] = []
+        delivered: list[rosmsg.Message] = []
         while pending is not None and pending[0] <= t + 1e-9:
             delivered.append(pending[1])
             pending = next(stream, None)
@@ -316,7 +309,7 @@ def run_once(ticks: Iterator[Tick], config: EkfConfig) -> RunResult:
         truth_at[k] = pose
         for msg in msgs:
             result = ekf.process(msg)
-            if not isinstance(msg, NavSatFix) or msg.status == NavSatStatus.NO_FIX:
+            if not isinstance(msg, rosmsg.NavSatFix) or msg.status == rosmsg.NavSatStatus.NO_FIX:
                 continue
             true = truth_at[round(msg.header.stamp * GRID)]
             point = gps_to_local_cartesian(msg)

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib.axes import Axes
@@ -31,6 +31,7 @@ from conesim.tracks import Track
 from conesim.tracks.global_path import GlobalPath
 
 if TYPE_CHECKING:  # the closed loop (and its compiled kernels) loads only for a run
+    from conesim.envs.metrics import ConeEventRecord
     from conesim.envs.runner import RunResult
 
 TRAJECTORY = "#9400d3"
@@ -61,18 +62,16 @@ def _map(ax: Axes, result: RunResult, track: Track, path: GlobalPath) -> None:
         off = (t >= excursion.t_start) & (t <= end)
         label = f"off track ({len(ev.off_track)})" if k == 0 else None
         ax.plot(x[off], y[off], color=EVENT, lw=3.0, label=label, zorder=6)
-    if ev.cones_hit:
-        ax.scatter(
-            [c.x for c in ev.cones_hit], [c.y for c in ev.cones_hit], s=90,
-            facecolors="none", edgecolors=EVENT, linewidths=1.2,
-            label=f"cone hit ({len(ev.cones_hit)})", zorder=7,
-        )  # fmt: skip
-    if ev.cones_down_or_out:
-        ax.scatter(
-            [c.x for c in ev.cones_down_or_out], [c.y for c in ev.cones_down_or_out], s=60,
-            marker="x", c=EVENT, linewidths=1.6,
-            label=f"cone down or out ({len(ev.cones_down_or_out)})", zorder=8,
-        )  # fmt: skip
+    cone_marks: tuple[tuple[str, list[ConeEventRecord], dict[str, Any]], ...] = (
+        ("cone hit", ev.cones_hit, {"s": 90, "facecolors": "none", "edgecolors": EVENT,
+                                    "linewidths": 1.2, "zorder": 7}),
+        ("cone down or out", ev.cones_down_or_out, {"s": 60, "marker": "x", "c": EVENT,
+                                                    "linewidths": 1.6, "zorder": 8}),
+    )  # fmt: skip
+    for name, cones, style in cone_marks:
+        if cones:
+            xy = np.array([(c.x, c.y) for c in cones])
+            ax.scatter(xy[:, 0], xy[:, 1], label=f"{name} ({len(cones)})", **style)
     ends = [int(np.argmin(np.abs(t - lap.t))) for lap in ev.laps] if len(t) else []
     if ends:
         ax.scatter(

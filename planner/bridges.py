@@ -95,6 +95,10 @@ class ConeSet:
     def __len__(self) -> int:
         return len(self.points)
 
+    def located(self) -> tuple[FloatArray, NDArray[np.int8], FloatArray, FloatArray]:
+        """(points, side, offset, station): the arrays the kernels take first, in that order."""
+        return self.points, self.side, self.offset, self.station
+
     def select(self, keep: BoolArray | IntArray) -> ConeSet:
         """The cones where ``keep`` (mask or indices)."""
         if keep.dtype == np.bool_:  # compress and take: faster than [] on (n, 2)
@@ -167,10 +171,7 @@ def pair_table(cones: ConeSet, config: MidlineConfig) -> PairTable:
     axis = cones.axis
     return PairTable(
         *kernels.pair_table(
-            cones.points,
-            cones.side,
-            cones.offset,
-            cones.station,
+            *cones.located(),
             axis.length,
             axis.closed,
             config.max_station_gap,
@@ -254,15 +255,7 @@ def virtual_partners(
 
 def _no_cones(axis: StationAxis) -> ConeSet:
     """An empty cone set (sharing arrays of no element, which nothing can change)."""
-    return ConeSet(
-        points=_NO_POINTS,
-        side=_NO_SIDES,
-        offset=_NO_VALUES,
-        station=_NO_VALUES,
-        tangent=_NO_POINTS,
-        virtual=_NO_FLAGS,
-        axis=axis,
-    )
+    return ConeSet(_NO_POINTS, _NO_SIDES, _NO_VALUES, _NO_VALUES, _NO_POINTS, _NO_FLAGS, axis)
 
 
 def delaunay_simplices(points: FloatArray) -> NDArray[np.intc]:
@@ -306,10 +299,7 @@ def find_bridges(
     check_width = track is not None and track.measured
     left, right, length, valid, used, midpoints, station = kernels.find_bridges(
         edges,
-        cones.points,
-        cones.side,
-        cones.offset,
-        cones.station,
+        *cones.located(),
         cones.virtual,
         cones.axis.length,
         cones.axis.closed,

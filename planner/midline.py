@@ -195,10 +195,7 @@ def boundary_cones(
     """
     axis = cones.axis
     keep, left, right, dist, same, span, middle, width, centre, measured = kernels.boundary_cones(
-        cones.points,
-        cones.side,
-        cones.offset,
-        cones.station,
+        *cones.located(),
         axis.length,
         axis.closed,
         config.view_settings,
@@ -224,10 +221,7 @@ def cones_with_partners(
     axis = cones.axis
     points, side, offset, station, tangent, virtual, width, centre, measured, dropped = (
         kernel_chains.plan_cones(
-            cones.points,
-            cones.side,
-            cones.offset,
-            cones.station,
+            *cones.located(),
             cones.tangent,
             axis.length,
             axis.closed,
@@ -266,10 +260,7 @@ def bridges_and_midpoints(
     left, right, length, valid, used, mid, station, boundary, ordered, ordered_length = (
         kernel_chains.plan_midpoints(
             simplices,
-            cones.points,
-            cones.side,
-            cones.offset,
-            cones.station,
+            *cones.located(),
             cones.virtual,
             axis.length,
             axis.closed,

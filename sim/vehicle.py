@@ -299,19 +299,10 @@ class Vehicle:
     def state(self) -> VehicleState:
         """The ground-truth state now."""
         x, y, yaw, vx, vy, yaw_rate, ax, ay, yaw_accel = self.kinematics()
+        steer, p = self._steering.angle, self.params
+        # The fields in their order (x y yaw vx vy yaw_rate steer ax ay yaw_accel antenna).
         return VehicleState(
-            x=x,
-            y=y,
-            yaw=yaw,
-            vx=vx,
-            vy=vy,
-            yaw_rate=yaw_rate,
-            steer=self._steering.angle,
-            ax=ax,
-            ay=ay,
-            yaw_accel=yaw_accel,
-            antenna_x=self.params.antenna_x,
-            antenna_y=self.params.antenna_y,
+            x, y, yaw, vx, vy, yaw_rate, steer, ax, ay, yaw_accel, p.antenna_x, p.antenna_y
         )
 
     def antenna_pose(self) -> Pose2D:

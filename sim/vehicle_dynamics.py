@@ -297,14 +297,14 @@ def blended_wrench(
 ) -> Wrench:
     """The force and moment to apply to the body for one step.
 
+    The dynamic model's wrench, the kinematic one's (``kinematic_wrench``,
+    whose arguments ``p``, ``vel``, ``steer``, ``dt`` and ``heading_change``
+    these are), or a blend by speed (``blend_weight``).
+
     Args:
-        p: vehicle parameters.
-        vel: body-frame velocity and yaw rate.
-        steer: front wheel angle [rad].
         accel_cmd: acceleration demand [m/s^2], already clipped to the limits.
-        ax_prev: body-frame longitudinal acceleration of the previous step [m/s^2].
-        dt: step [s].
-        heading_change: heading change of the body during this step [rad].
+        ax_prev: body-frame longitudinal acceleration of the previous step [m/s^2]
+            (for the axle loads).
 
     Returns:
         Resultant at the CG in the body frame, and the yaw moment.

@@ -10,13 +10,10 @@ module (``consts.SCALE``); plus a warm-up for :func:`parallel_warm_up`.
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
-REPO = Path(__file__).resolve().parents[2]
+from tests.child_process import python
 
 PROBE = '''
 from conesim.core.compiled import cached_njit
@@ -90,22 +87,6 @@ def run(root: Path, action: str = "", cores: int = 1, **env: str) -> tuple[dict[
     ``chain`` and ``offset`` in that process; its stderr)."""
     done = python(RUN.format(root=str(root), cores=cores, action=action), **env)
     return json.loads(done.stdout.strip().splitlines()[-1]), done.stderr
-
-
-def python(script: str, **env: str) -> subprocess.CompletedProcess[str]:
-    """Run ``script`` in a fresh Python from the repository, without the caller's ``NUMBA_*``
-    settings but with ``env``; it must succeed."""
-    done = subprocess.run(
-        [sys.executable, "-c", script],
-        capture_output=True,
-        text=True,
-        check=False,
-        timeout=900,
-        cwd=REPO,
-        env={**{k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}, **env},
-    )
-    assert done.returncode == 0, done.stdout + done.stderr
-    return done
 
 
 def cache_files(package: Path, pattern: str) -> list[Path]:

@@ -8,7 +8,8 @@ from pathlib import Path
 import pytest
 
 from conesim.core import compiled
-from tests.core.demo_kernels import edit, python, run, write_package
+from tests.child_process import python
+from tests.core.demo_kernels import edit, run, write_package
 
 
 def notice(cores: int = 1, *, cached: bool = True) -> str:

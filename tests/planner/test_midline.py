@@ -50,6 +50,14 @@ def worst(track, in_ref: np.ndarray) -> float:
     return float(track.distance_to_centre(in_ref).max())
 
 
+def followed(scene) -> tuple[LocalPlan, float]:
+    """Plan ``scene``, which must plan OK: the plan, and its largest distance from the
+    scene's true centreline [m]."""
+    plan, in_ref, _ = plan_scene(scene)
+    assert plan.status is PlanStatus.OK
+    return plan, worst(scene.track, in_ref)
+
+
 def ahead_of(pose: Pose2D, cones: np.ndarray, count: int, skip: int = 0) -> np.ndarray:
     """Indices of the ``count`` cones nearest in front of ``pose``, after ``skip``."""
     local = pose.inverse_transform_points(cones)
@@ -99,10 +107,9 @@ def test_circle_midline_within_2_cm(
     """On a circle of R = 15 m the path stays within 2 cm of the centreline (measured 7 mm)."""
     track = synth.circle_track(clockwise=clockwise)
     scene = synth.make_scene(track, synth.pose_on(track, 37, lateral, dyaw))
-    plan, in_ref, _ = plan_scene(scene)
-    assert plan.status is PlanStatus.OK
+    plan, off = followed(scene)
     assert plan.path[-1, 0] > 10.0  # the path reaches well ahead
-    assert worst(track, in_ref) < 0.02
+    assert off < 0.02
     spacing = np.hypot(*np.diff(plan.path, axis=0).T)
     assert_allclose(spacing[:-1], 0.5, rtol=2e-3)
 
@@ -118,10 +125,9 @@ def test_gap_of_missing_cones(synth: ModuleType, circle, missing: int, side: str
     row = getattr(circle, side)
     kept = np.delete(row, ahead_of(pose, row, missing, skip=1), axis=0)
     scene = synth.make_scene(circle, pose, **{side: kept})
-    plan, in_ref, _ = plan_scene(scene)
-    assert plan.status is PlanStatus.OK
+    plan, off = followed(scene)
     assert len(plan.virtual) >= missing - 1
-    assert worst(circle, in_ref) < 0.03
+    assert off < 0.03
 
 
 @pytest.mark.parametrize("where", [(7.5, 0.0), (7.5, 0.8), (12.0, -0.6), (6.0, 0.2)])
@@ -135,9 +141,8 @@ def test_false_positive_inside_the_track(synth: ModuleType, straight, circle, wh
             radial = ghost[0] / np.hypot(*ghost[0])
             ghost = radial[None, :] * (15.0 - where[1])
         scene = synth.make_scene(track, pose, extra=ghost)
-        plan, in_ref, _ = plan_scene(scene)
-        assert plan.status is PlanStatus.OK
-        assert worst(track, in_ref) < 0.05
+        _, off = followed(scene)
+        assert off < 0.05
 
 
 def test_false_positive_just_outside_the_track(synth: ModuleType, circle) -> None:
@@ -145,9 +150,8 @@ def test_false_positive_just_outside_the_track(synth: ModuleType, circle) -> Non
     pose = synth.pose_on(circle, 0)
     ghost = np.array([[17.0 * np.cos(0.4), 17.0 * np.sin(0.4)]])
     scene = synth.make_scene(circle, pose, extra=ghost)
-    plan, in_ref, _ = plan_scene(scene)
-    assert plan.status is PlanStatus.OK
-    assert worst(circle, in_ref) < 0.25
+    _, off = followed(scene)
+    assert off < 0.25
 
 
 def test_misclassified_cone_by_colour(synth: ModuleType, circle) -> None:
@@ -184,10 +188,9 @@ def test_only_one_side_in_view(synth: ModuleType, circle, visible: str) -> None:
     pose = synth.pose_on(circle, 0)
     hidden = "right" if visible == "left" else "left"
     scene = synth.make_scene(circle, pose, **{hidden: np.zeros((0, 2))})
-    plan, in_ref, _ = plan_scene(scene)
-    assert plan.status is PlanStatus.OK
+    plan, off = followed(scene)
     assert plan.track.width == 3.0 and not plan.track.measured  # the nominal width
-    assert worst(circle, in_ref) < 0.03
+    assert off < 0.03
 
 
 def test_one_side_of_a_wider_track_offsets_by_the_nominal_half_width(synth: ModuleType) -> None:
@@ -214,9 +217,8 @@ def test_hairpin_far_side_through_the_infield(
     if hide_inner_exit:
         left = left[~((left[:, 1] > 3.5) & (left[:, 0] < -0.5))]
     scene = synth.make_scene(hairpin, synth.pose_on(hairpin, index), left=left)
-    plan, in_ref, _ = plan_scene(scene)
-    assert plan.status is PlanStatus.OK
-    assert worst(hairpin, in_ref) < 0.5
+    plan, off = followed(scene)
+    assert off < 0.5
     used = plan.bridge_lines[plan.bridges.used]
     assert np.all(np.hypot(*(used[:, 0] - used[:, 1]).T) < 4.5)  # no bridge across the infield
 

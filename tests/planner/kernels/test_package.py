@@ -3,32 +3,18 @@ each process without a cache), and all loaded by the autopilot's warm-up."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
-from pathlib import Path
-
 import numpy as np
 from numpy.testing import assert_array_equal
 
 from conesim.planner import MidlineConfig
 from conesim.planner.midline import boundary_cones
+from tests.child_process import python
 from tests.planner.kernels.helpers import loop_projector, random_cones
-
-REPO = Path(__file__).resolve().parents[3]  # the child processes import from here
 
 
 def run_child(script: str) -> None:
     """Run ``script`` in a fresh Python process from the repository; it must print "ok"."""
-    done = subprocess.run(
-        [sys.executable, "-c", script],
-        capture_output=True,
-        text=True,
-        check=False,
-        timeout=600,
-        cwd=REPO,
-    )
-    assert done.returncode == 0, done.stdout + done.stderr
-    assert done.stdout.strip() == "ok"
+    assert python(script).stdout.strip() == "ok"
 
 
 def test_kernels_are_deterministic() -> None:
