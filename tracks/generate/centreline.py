@@ -22,14 +22,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 from scipy.ndimage import gaussian_filter1d
-from scipy.optimize import lsq_linear
 
 FloatArray = NDArray[np.float64]
 
 STEP = 0.05  # [m] integration step of the centreline
 SMOOTH_SIGMA_M = 1.5  # [m] Gaussian smoothing of the curvature profile
 CLOSE_ITERATIONS = 20  # Newton steps of the loop closure
-MISS_WEIGHT = 1.0e4  # the closure's miss against its change of length, in the least squares
 
 
 class LoopClosureError(ValueError):
@@ -133,9 +131,11 @@ def _length_changes(
 ) -> FloatArray:
     """Changes of the free straights' lengths [m] that cancel ``miss`` (2,) [m].
 
-    Two straights: the one exact solution. More: the smallest changes, each
-    weighted by its straight's length (long straights give more), within
-    each straight's bounds, by bounded least squares.
+    Two straights: the one exact solution. More: the smallest changes
+    weighted by the straights' lengths (a long straight gives more),
+    delta = W D' (D W D')^-1 (-miss) with D the (2, k) directions and W =
+    diag(lengths); a straight that would leave its bounds is held at the
+    bound and the rest solved again (an active set, at most k rounds).
     """
     lengths = np.array([segs[i].length for i in free_idx])
     lo = np.array([segs[i].min_length for i in free_idx]) - lengths
@@ -145,15 +145,28 @@ def _length_changes(
             delta = np.linalg.solve(dirs, -miss)
         except np.linalg.LinAlgError:
             raise LoopClosureError("the two free straights are parallel") from None
-    else:
-        scale = np.sqrt(np.maximum(lengths, 1.0))
-        # minimise |delta / scale|^2 + W^2 |dirs delta + miss|^2 over the bounds
-        a = np.vstack([np.diag(1.0 / scale), MISS_WEIGHT * dirs])
-        b = np.concatenate([np.zeros(len(lengths)), -MISS_WEIGHT * miss])
-        delta = lsq_linear(a, b, bounds=(np.minimum(lo, 0.0), np.maximum(hi, 0.0))).x
+        _check_bounds(delta, lo, hi, lengths)
+        return np.asarray(delta, dtype=float)
+    delta = np.zeros(len(lengths))
+    held = np.zeros(len(lengths), dtype=bool)
+    for _ in range(len(lengths)):
+        rest = -miss - dirs[:, held] @ delta[held]
+        d, w = dirs[:, ~held], np.maximum(lengths[~held], 1.0)
+        gram = (d * w) @ d.T
+        if abs(np.linalg.det(gram)) < 1e-9:
+            break
+        delta[~held] = w * (d.T @ np.linalg.solve(gram, rest))
+        low, high = delta < lo - 1e-9, delta > hi + 1e-9
+        if not (low.any() or high.any()):
+            return delta
+        delta = np.clip(delta, lo, hi)
+        held |= low | high
+    raise LoopClosureError("no lengths of the free straights within their bounds close the loop")
+
+
+def _check_bounds(delta: FloatArray, lo: FloatArray, hi: FloatArray, lengths: FloatArray) -> None:
     if np.any(delta < lo - 1e-9) or np.any(delta > hi + 1e-9):
         k = int(np.argmax(np.maximum(lo - delta, delta - hi)))
         raise LoopClosureError(
             f"loop closure needs a free straight of {lengths[k] + delta[k]:.1f} m"
         )
-    return np.asarray(delta, dtype=float)
