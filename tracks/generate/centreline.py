@@ -142,11 +142,11 @@ def _length_changes(
     hi = np.array([segs[i].max_length for i in free_idx]) - lengths
     if len(free_idx) == 2:
         try:
-            delta = np.linalg.solve(dirs, -miss)
+            delta: FloatArray = np.asarray(np.linalg.solve(dirs, -miss), dtype=np.float64)
         except np.linalg.LinAlgError:
             raise LoopClosureError("the two free straights are parallel") from None
         _check_bounds(delta, lo, hi, lengths)
-        return np.asarray(delta, dtype=float)
+        return delta
     delta = np.zeros(len(lengths))
     held = np.zeros(len(lengths), dtype=bool)
     for _ in range(len(lengths)):
@@ -159,7 +159,7 @@ def _length_changes(
         low, high = delta < lo - 1e-9, delta > hi + 1e-9
         if not (low.any() or high.any()):
             return delta
-        delta = np.clip(delta, lo, hi)
+        delta = np.asarray(np.clip(delta, lo, hi), dtype=np.float64)
         held |= low | high
     raise LoopClosureError("no lengths of the free straights within their bounds close the loop")
 

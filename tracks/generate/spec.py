@@ -89,25 +89,17 @@ class TrackSpec:
             value = getattr(self, name)
             if value is not None:
                 object.__setattr__(self, name, _pair(name, value))
-        lo, hi = self.lengths
-        _check("length", lo, 50.0, hi, "m")
-        _check("length", hi, lo, 2000.0, "m")
         _check("min_radius", self.min_radius, 1.0, 50.0, "m")
-        _check("width", self.width[0], FS_MIN_WIDTH_M, self.width[1], "m")
-        _check("width", self.width[1], self.width[0], 2 * self.min_radius - self.leg_gap, "m")
-        h0, h1 = self.hairpin_counts
-        _check("hairpins", h0, 0, h1, "")
-        _check("hairpins", h1, h0, 10, "")
-        r0, r1 = self.hairpin_radius
-        _check("hairpin_radius", r0, self.min_radius, r1, "m")
-        _check("hairpin_radius", r1, r0, FS_MAX_CONSTANT_TURN_RADIUS_M, "m")
+        _check("leg_gap", self.leg_gap, 0.5, 10.0, "m")
+        _range("length", self.lengths, 50.0, 2000.0, "m")
+        _range("width", self.width, FS_MIN_WIDTH_M, 2 * self.min_radius - self.leg_gap, "m")
+        _range("hairpins", self.hairpin_counts, 0, 10, "")
+        top = FS_MAX_CONSTANT_TURN_RADIUS_M
+        _range("hairpin_radius", self.hairpin_radius, self.min_radius, top, "m")
         _check("tight_share", self.tight_share, 0.0, 1.0, "")
-        g0, g1 = self.gate_offset
-        _check("gate_offset", g0, 0.0, g1, "m")
-        _check("gate_offset", g1, g0, 3.0, "m")
+        _range("gate_offset", self.gate_offset, 0.0, 3.0, "m")
         _check("max_spacing", self.max_spacing, self.min_spacing, FS_MAX_SPACING_M, "m")
         _check("min_spacing", self.min_spacing, 0.5, self.max_spacing, "m")
-        _check("leg_gap", self.leg_gap, 0.5, 10.0, "m")
         if isinstance(self.max_attempts, bool) or not isinstance(self.max_attempts, int):
             raise ValueError(f"TrackSpec.max_attempts = {self.max_attempts!r}: expected an integer")
         _check("max_attempts", self.max_attempts, 1, 10_000, "")
@@ -169,14 +161,23 @@ class GeneratedTrack:
 
 
 def _pair(name: str, value: object) -> tuple[float, float]:
-    try:
-        a, b = value  # type: ignore[misc]
-    except (TypeError, ValueError):
-        raise ValueError(f"TrackSpec.{name} = {value!r}: expected a pair (low, high)") from None
-    for v in (a, b):
+    items = tuple(value) if isinstance(value, tuple | list) else ()
+    if len(items) != 2:
+        raise ValueError(f"TrackSpec.{name} = {value!r}: expected a pair (low, high)")
+    for v in items:
         if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
             raise ValueError(f"TrackSpec.{name} = {value!r}: expected two finite numbers")
-    return (a, b)
+    return (items[0], items[1])
+
+
+def _range(name: str, pair: tuple[float, float], lo: float, hi: float, unit: str) -> None:
+    a, b = pair
+    if not lo <= a <= b <= hi:
+        units = f" [{unit}]" if unit else ""
+        raise ValueError(
+            f"TrackSpec.{name} = ({a:g}, {b:g}) is out of range: allowed "
+            f"{lo:g} <= low <= high <= {hi:g}{units}"
+        )
 
 
 def _check(name: str, value: float, lo: float, hi: float, unit: str) -> None:
