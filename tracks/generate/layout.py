@@ -2,7 +2,8 @@
 
 One attempt (``random_layout``) draws, from its own random generator:
 
-1. the lap length (within the spec's range) and the lane's width;
+1. the lap length (within the spec's range, 10 % in from its ends) and
+   the lane's width;
 2. the hairpins: each turns 165-195 deg at a lane-centre radius within
    ``hairpin_radius``, or, for a ``tight_share`` of them, down to
    ``min_radius``; mostly the loop's way round, sometimes against it;
@@ -35,6 +36,7 @@ from conesim.tracks.generate.spec import (
     TrackSpec,
 )
 
+LENGTH_MARGIN = 0.1  # the lap is drawn from the length range less this share at either end
 START_STRAIGHT_M = (20.0, 40.0)  # [m] the start straight: gate, standing start, run-up
 MIN_STRAIGHT_M = 3.0  # [m] between two features
 FEATURE_SHARE = 0.45  # features (arcs) take about this share of the lap, straights the rest
@@ -67,7 +69,9 @@ class Layout:
 
 def random_layout(rng: np.random.Generator, spec: TrackSpec) -> Layout | None:
     """One random layout (module docstring), or None when the draws cannot make one."""
-    target = float(rng.uniform(*spec.lengths))
+    lo, hi = spec.lengths
+    margin = LENGTH_MARGIN * (hi - lo)  # closing the loop changes the length a little
+    target = float(rng.uniform(lo + margin, hi - margin))
     width = float(rng.uniform(*spec.width))
     gate_offset = float(rng.uniform(*spec.gate_offset))
     features: list[tuple[str, list[Segment], float]] = []  # kind, arcs, net turn [deg]
