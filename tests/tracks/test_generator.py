@@ -28,7 +28,7 @@ from conesim.tracks import (
 from conesim.tracks.generate.spec import SIZE_LENGTHS
 
 SEEDS = range(1000, 1010)  # per size; the benchmarks use other seeds
-DERIVED_WIDTH_TOLERANCE_M = 0.05  # the width derived from the cones reads up to 2 cm narrow
+DERIVED_WIDTH_TOLERANCE_M = 0.03  # the width derived from the cones reads up to 2-3 cm narrow
 
 
 def tightest_radius(track: Track) -> float:
@@ -47,7 +47,7 @@ def lane_width(track: Track) -> float:
 @pytest.mark.parametrize("size", list(SIZE_LENGTHS))
 def test_generated_tracks_keep_the_fs_rules(size: str) -> None:
     """On 10 seeds of each size: a closed loop of the size's length, 3 m wide or more
-    (the derived width to 5 cm), cones at most 5 m apart along each side, no crossings,
+    (the derived width to 3 cm), cones at most 5 m apart along each side, no crossings,
     no turn tighter than the 3 m floor (to 10 %), a gate of 4 big orange cones standing
     wider than the lane, the car behind the line; track check finds nothing else."""
     spec = TrackSpec(size=size)  # type: ignore[arg-type]
@@ -81,9 +81,7 @@ def test_generated_tracks_keep_the_fs_rules(size: str) -> None:
         behind = (line - centre.project(track.start_pose.xy).station[0]) % track.length_m
         assert behind == pytest.approx(4.0, abs=0.1)
         report = check_report(track)
-        assert report["errors"] == []
-        narrow = [w for w in report["warnings"] if re.match(r"track width (2\.9[5-9]|3\.00) m", w)]
-        assert report["warnings"] == narrow, (seed, report["warnings"])
+        assert report["errors"] == [] and report["warnings"] == [], (seed, report)
 
 
 def test_tight_hairpins_go_below_the_regular_ones_down_to_the_floor() -> None:
