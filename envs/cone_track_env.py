@@ -62,6 +62,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
@@ -78,7 +79,7 @@ from conesim.envs.scenario import Localization
 from conesim.planner.messages import ControlCommand
 from conesim.sim.events import RaceStanding
 from conesim.sim.sensors import SensorProfile, get_profile
-from conesim.tracks import Track, load_track
+from conesim.tracks import GeneratedTrack, Track, TrackSource, load_track
 
 ObsType = NDArray[np.float32] | dict[str, NDArray[np.float32]]
 RESET_OPTIONS = ("track", "sensors", "localization", "start_pose")
@@ -107,7 +108,7 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         self.metadata = {**self.metadata, "render_fps": round(self.config.control_rate)}
         self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
         self.observation_space = observation_space(self.config.max_cones, self.config.observation)
-        self._track_cache: dict[str, Track] = {}
+        self._track_cache: dict[TrackSource, Track] = {}
         cfg = self.config
         self.loop = self._build_loop(cfg.track, cfg.sensors, cfg.localization)
         self._record: StepRecord | None = None  # the last step's; None before reset
@@ -240,18 +241,18 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         return np.clip(np.array([steer / p.max_steer, a], dtype=np.float32), -1.0, 1.0)
 
     def _build_loop(
-        self, track_name: str, sensors: SensorProfile | str, localization: Localization
+        self, track_name: TrackSource, sensors: SensorProfile | str, localization: Localization
     ) -> ClosedLoop:
         """A loop for one episode: the env's scenario with this track, sensors, localization."""
         scenario = dataclasses.replace(
             self.config.to_scenario(),
-            track=track_name,
+            track=track_name if isinstance(track_name, GeneratedTrack) else os.fspath(track_name),
             sensors=sensors if isinstance(sensors, SensorProfile) else get_profile(sensors),
             localization=localization,
         )
         return scenario.closed_loop(self._track(track_name))
 
-    def _track(self, name: str) -> Track:
+    def _track(self, name: TrackSource) -> Track:
         if name not in self._track_cache:
             self._track_cache[name] = load_track(name)
         return self._track_cache[name]
