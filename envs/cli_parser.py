@@ -108,7 +108,17 @@ def build_parser() -> argparse.ArgumentParser:
         "(ros extra)",
     )
 
-    _sweep_parser(sub, verbose)
+    _sweep_options(
+        sub.add_parser(
+            "sweep",
+            parents=[verbose],
+            help="run many scenarios: a base scenario and the axes to vary",
+            description="Run a sweep: a base scenario and the axes to vary (their product, or\n"
+            "a list of points), every run checked before the first starts (README: Sweeps).",
+            epilog=SWEEP_EPILOG,
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
+    )
 
     scenario = sub.add_parser(
         "scenario", parents=[verbose], help="inspect a scenario (the settings of a run)"
@@ -136,17 +146,8 @@ interrupted sweep, skipping the runs done. Exit status: 0 every run clean,
 1 some run not clean or an error, 2 bad input, 130 interrupted (Ctrl-C)."""
 
 
-def _sweep_parser(sub: argparse._SubParsersAction, verbose: argparse.ArgumentParser) -> None:
+def _sweep_options(sweep: argparse.ArgumentParser) -> None:
     """``conesim sweep SWEEP.yaml --out DIR`` and ``conesim sweep summary DIR``."""
-    sweep = sub.add_parser(
-        "sweep",
-        parents=[verbose],
-        help="run many scenarios: a base scenario and the axes to vary",
-        description="Run a sweep: a base scenario and axes to vary (their product, or a list "
-        "of points), every run checked before the first starts (README: Sweeps).",
-        epilog=SWEEP_EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
     sweep.add_argument(
         "sweep", metavar="SWEEP.yaml", help="the sweep file (or 'summary', then DIR)"
     )
