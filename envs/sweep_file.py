@@ -60,7 +60,8 @@ from conesim.envs.scenario_file import (
     with_absolute_track,
 )
 from conesim.envs.yaml_io import Lines, dump_yaml, read_yaml
-from conesim.tracks import check_report, load_track
+from conesim.tracks import TrackFormatError, check_report, load_track
+from conesim.tracks.global_path import GlobalPathError
 
 FORMAT_KEY = "conesim_sweep"
 FORMAT_VERSION = 1
@@ -327,6 +328,9 @@ def _track_errors(track: str) -> tuple[str, ...]:
 
 def _check_track(track: str, source: str) -> None:
     """A track that cannot be read, or in which ``track check`` finds errors, is bad input."""
-    errors = _track_errors(track)
+    try:
+        errors = _track_errors(track)
+    except (TrackFormatError, GlobalPathError, OSError) as exc:
+        raise FieldError(("track",), str(exc), source) from None
     if errors:
         raise FieldError(("track",), f"{track}: {errors[0]}", source)

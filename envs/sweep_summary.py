@@ -191,7 +191,7 @@ def save_summary_picture(tables: Mapping[str, Sequence[ValueStats]], out: Path) 
     if with_ratios:
         ax_ratio.boxplot(
             [list(r) for _, r in with_ratios], positions=[yi for yi, _ in with_ratios],
-            vert=False, widths=0.6, manage_ticks=False,
+            orientation="horizontal", widths=0.6, manage_ticks=False,
         )  # fmt: skip
     ax_ratio.ticklabel_format(axis="x", useOffset=False)
     ax_ratio.set_xlabel("lap-time ratio: best lap / friction-limited lap [-]")
