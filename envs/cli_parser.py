@@ -171,3 +171,10 @@ def _sweep_options(sweep: argparse.ArgumentParser) -> None:
         metavar="ADDRESS",
         help="run on Ray: a local Ray started for the sweep, or the cluster at ADDRESS (ray extra)",
     )
+    sweep.add_argument(
+        "--pictures",
+        choices=("all", "failed", "none"),
+        default="all",
+        help="which runs get a run.png: all (default), failed (not clean) or none; drawing "
+        "one takes longer than a short run",
+    )

@@ -52,7 +52,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         _check_ray_extra()
     try:
         report = run_sweep(
-            sweep, out, workers=args.workers, ray=args.ray, stderr=sys.stderr,
+            sweep, out, workers=args.workers, ray=args.ray, pictures=args.pictures,
+            stderr=sys.stderr,
             tty=sys.stderr.isatty(),
         )  # fmt: skip
     except KeyboardInterrupt:

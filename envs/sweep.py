@@ -20,7 +20,14 @@ from conesim.envs.progress import SweepProgress
 from conesim.envs.sweep_file import Sweep
 from conesim.envs.sweep_store import SweepStore, check_sweep_dir, pending
 from conesim.envs.sweep_summary import write_summary
-from conesim.envs.sweep_workers import Results, default_workers, pool, ray_tasks, serial
+from conesim.envs.sweep_workers import (
+    Pictures,
+    Results,
+    default_workers,
+    pool,
+    ray_tasks,
+    serial,
+)
 
 LOCAL_RAY = "local"
 """``ray=LOCAL_RAY``: start a local Ray (``--ray`` without an address)."""
@@ -44,6 +51,7 @@ def run_sweep(
     *,
     workers: int | None = None,
     ray: str | None = None,
+    pictures: Pictures = "all",
     stderr: TextIO | None = None,
     tty: bool = False,
     on_row: Callable[[dict[str, Any]], None] | None = None,
@@ -57,6 +65,8 @@ def run_sweep(
             With ``ray``: the local Ray's CPUs, or the tasks in flight.
         ray: None (local processes), ``LOCAL_RAY`` (a local Ray), or a
             Ray cluster's address.
+        pictures: which runs get a ``run.png``: ``all``, ``failed`` (not
+            clean) or ``none``.
         stderr: where the progress goes (None: nowhere).
         tty: ``stderr`` is a terminal (a bar, not sparse lines).
         on_row: called with each row once it is written (``results.jsonl``).
@@ -71,7 +81,7 @@ def run_sweep(
         rows = store.open()
         todo = list(pending(sweep, rows))
         progress = _progress(stderr, tty, len(sweep.points), rows)
-        results = _results(todo, count, ray)
+        results = _results(todo, count, ray, pictures)
         ran = clean = errors = 0
         try:
             for point, outcome in results:
@@ -102,12 +112,12 @@ def run_sweep(
     )
 
 
-def _results(todo: list[Any], workers: int, ray: str | None) -> Results:
+def _results(todo: list[Any], workers: int, ray: str | None, pictures: Pictures) -> Results:
     if ray is not None:
-        return ray_tasks(todo, workers, None if ray == LOCAL_RAY else ray)
+        return ray_tasks(todo, workers, None if ray == LOCAL_RAY else ray, pictures)
     if workers <= 1 or len(todo) <= 1:
-        return serial(todo)
-    return pool(todo, min(workers, len(todo)))
+        return serial(todo, pictures)
+    return pool(todo, min(workers, len(todo)), pictures)
 
 
 def _progress(

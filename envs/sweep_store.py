@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TextIO
@@ -65,7 +65,7 @@ class Outcome:
 
     Attributes:
         payload: ``result.json``'s data (None after an error).
-        picture: ``run.png``'s bytes (None after an error).
+        picture: ``run.png``'s bytes (None after an error, or not drawn).
         error: what went wrong (None when the run finished).
     """
 
@@ -187,14 +187,12 @@ class SweepStore:
             write_together(folder, {"error.txt": lambda p: p.write_text(text, encoding="utf-8")})
         else:
             payload = json.dumps(outcome.payload, indent=2) + "\n"
-            picture = outcome.picture or b""
-            write_together(
-                folder,
-                {
-                    "run.png": lambda p: p.write_bytes(picture),
-                    "result.json": lambda p: p.write_text(payload, encoding="utf-8"),
-                },
-            )
+            picture = outcome.picture
+            files: dict[str, Callable[[Path], object]] = {}
+            if picture is not None:
+                files["run.png"] = lambda p: p.write_bytes(picture)
+            files["result.json"] = lambda p: p.write_text(payload, encoding="utf-8")
+            write_together(folder, files)
         row = make_row(point, outcome)
         self._results.write(json.dumps(row) + "\n")
         self._results.flush()

@@ -155,19 +155,22 @@ def failure_reason(row: Row) -> str:
     return ", ".join(parts) or "not clean"
 
 
-def failed_markdown(rows: Sequence[Row]) -> str:
-    """``failed.md``: each run that was not clean, its labels, reason and picture."""
+def failed_markdown(rows: Sequence[Row], out: Path) -> str:
+    """``failed.md`` of the sweep in ``out``: each run that was not clean, its labels,
+    reason and picture (or its result.json when it has none, or its traceback)."""
     failed = sorted((r for r in rows if not r.get("clean")), key=lambda r: r.get("index", 0))
-    out = ["# Runs that failed", "", f"{len(failed)} of {len(rows)} runs were not clean."]
+    lines = ["# Runs that failed", "", f"{len(failed)} of {len(rows)} runs were not clean."]
     for row in failed:
         run = f"{RUNS}/{row['run_id']}"
         labels = ", ".join(f"{k} = {v}" for k, v in row["axes"].items())
-        out += ["", f"## {row['run_id']}", "", f"{labels}: **{failure_reason(row)}**", ""]
+        lines += ["", f"## {row['run_id']}", "", f"{labels}: **{failure_reason(row)}**", ""]
         if row.get("status") == "error":
-            out.append(f"Traceback: [{run}/error.txt]({run}/error.txt)")
+            lines.append(f"Traceback: [{run}/error.txt]({run}/error.txt)")
+        elif (out / run / "run.png").is_file():
+            lines.append(f"[![{row['run_id']}]({run}/run.png)]({run}/result.json)")
         else:
-            out.append(f"[![{row['run_id']}]({run}/run.png)]({run}/result.json)")
-    return "\n".join(out) + "\n"
+            lines.append(f"[{run}/result.json]({run}/result.json)")
+    return "\n".join(lines) + "\n"
 
 
 def save_summary_picture(tables: Mapping[str, Sequence[ValueStats]], out: Path) -> Path:
@@ -217,7 +220,7 @@ def write_summary(out: Path) -> str:
     axes = [str(a) for a in made.get("axes", [])]
     rows = read_rows(out / RESULTS)
     text = summary_markdown(rows, axes, len(made.get("runs", [])))
-    failed = failed_markdown(rows)
+    failed = failed_markdown(rows, out)
     save_summary_picture(axis_tables(rows, axes), out / "summary.png")
     write_together(
         out,

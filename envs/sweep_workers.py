@@ -34,7 +34,7 @@ from collections.abc import Generator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, get_args
 
 from gymnasium.error import DependencyNotInstalled
 
@@ -42,14 +42,21 @@ from conesim.envs.scenario import Scenario
 from conesim.envs.sweep_file import SweepPoint
 from conesim.envs.sweep_store import Outcome, RunError
 
+Pictures = Literal["all", "failed", "none"]
+"""Which runs get a ``run.png``: every run, those not clean, or none."""
+PICTURES: tuple[str, ...] = get_args(Pictures)
 MAX_ATTEMPTS = 2
 """A run in flight when this many workers died is recorded as an error."""
 
 Results = Generator[tuple[SweepPoint, Outcome], None, None]
 
 
-def run_point(scenario: Scenario) -> Outcome:
-    """Run one scenario; its result and picture, or the error it raised."""
+def run_point(scenario: Scenario, pictures: Pictures = "all") -> Outcome:
+    """Run one scenario; its result and picture, or the error it raised.
+
+    ``pictures``: draw ``run.png`` for every run, only for a run that is not
+    clean, or for none (drawing takes longer than a short run).
+    """
     from conesim.envs.run_plot import save_run_picture  # noqa: PLC0415 (in the worker)
     from conesim.envs.runner import run_scenario  # noqa: PLC0415
     from conesim.tracks import load_track  # noqa: PLC0415
@@ -57,6 +64,8 @@ def run_point(scenario: Scenario) -> Outcome:
 
     try:
         result = run_scenario(scenario)
+        if pictures == "none" or (pictures == "failed" and result.clean):
+            return Outcome(payload=result.to_json())
         track = load_track(scenario.track)
         with tempfile.TemporaryDirectory(prefix="conesim-sweep-") as tmp:
             picture = Path(tmp) / "run.png"
@@ -75,10 +84,10 @@ def warm_worker() -> None:
     warm_up_planner()
 
 
-def serial(points: Sequence[SweepPoint]) -> Results:
+def serial(points: Sequence[SweepPoint], pictures: Pictures = "all") -> Results:
     """The runs one after the other, in this process."""
     for point in points:
-        yield point, run_point(point.scenario)
+        yield point, run_point(point.scenario, pictures)
 
 
 def _died(point: SweepPoint, deaths: int) -> Outcome:
@@ -86,7 +95,7 @@ def _died(point: SweepPoint, deaths: int) -> Outcome:
     return Outcome(error=RunError("WorkerDied", message, message + "\n"))
 
 
-def pool(points: Sequence[SweepPoint], workers: int) -> Results:
+def pool(points: Sequence[SweepPoint], workers: int, pictures: Pictures = "all") -> Results:
     """The runs on ``workers`` local processes (see the module docstring)."""
     context = multiprocessing.get_context("spawn")
     queue = deque(points)
@@ -100,7 +109,7 @@ def pool(points: Sequence[SweepPoint], workers: int) -> Results:
             while queue or running:
                 while queue and len(running) < workers and not broken:
                     point = queue.popleft()
-                    running[executor.submit(run_point, point.scenario)] = point
+                    running[executor.submit(run_point, point.scenario, pictures)] = point
                 if not running:
                     break
                 done, _ = wait(running, return_when=FIRST_COMPLETED)
@@ -133,7 +142,9 @@ def _end(executor: ProcessPoolExecutor, before: set[Any]) -> None:
         process.join(5.0)
 
 
-def ray_tasks(points: Sequence[SweepPoint], workers: int, address: str | None) -> Results:
+def ray_tasks(
+    points: Sequence[SweepPoint], workers: int, address: str | None, pictures: Pictures = "all"
+) -> Results:
     """The runs as Ray tasks (see the module docstring)."""
     try:
         import ray  # noqa: PLC0415
@@ -153,13 +164,15 @@ def ray_tasks(points: Sequence[SweepPoint], workers: int, address: str | None) -
         else:
             ray.init(address=address, **options)
     try:
-        yield from _ray_loop(ray, points, workers, address)
+        yield from _ray_loop(ray, points, workers, address, pictures)
     finally:
         if started:
             ray.shutdown()
 
 
-def _ray_loop(ray: Any, points: Sequence[SweepPoint], workers: int, address: str | None) -> Results:
+def _ray_loop(
+    ray: Any, points: Sequence[SweepPoint], workers: int, address: str | None, pictures: Pictures
+) -> Results:
     task = ray.remote(num_cpus=1, max_retries=MAX_ATTEMPTS - 1)(run_point)
     slots = workers if address is None else max(1, int(ray.cluster_resources().get("CPU", 1)))
     queue = deque(points)
@@ -168,7 +181,7 @@ def _ray_loop(ray: Any, points: Sequence[SweepPoint], workers: int, address: str
         while queue or running:
             while queue and len(running) < slots:
                 point = queue.popleft()
-                running[task.remote(point.scenario)] = point
+                running[task.remote(point.scenario, pictures)] = point
             done, _ = ray.wait(list(running), num_returns=1)
             for ref in done:
                 point = running.pop(ref)

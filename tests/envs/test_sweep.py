@@ -37,9 +37,9 @@ QUICK = """\
 conesim_sweep: 1
 base: {track: skidpad, laps: 1, localization: truth}
 axes:
-  seed: {range: [0, 6]}
+  seed: {range: [0, 4]}
 """
-"""6 quick runs (about 0.3 s each)."""
+"""4 quick runs (about 0.4 s each, and a picture)."""
 
 
 def comparable(out: Path) -> dict[str, Any]:
@@ -67,21 +67,32 @@ def sweep_file(tmp_path: Path, text: str) -> Path:
 def serial_fused(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     """The fused sweep run in this process, one run after the other."""
     tmp = tmp_path_factory.mktemp("serial")
-    report = run_sweep(load_sweep(sweep_file(tmp, FUSED)), tmp / "out", workers=1)
+    report = run_sweep(load_sweep(sweep_file(tmp, FUSED)), tmp / "out", workers=1, pictures="none")
     assert (report.total, report.ran, report.errors) == (4, 4, 0)
+    return comparable(tmp / "out")
+
+
+@pytest.fixture(scope="module")
+def serial_quick(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    """The quick sweep run in this process."""
+    tmp = tmp_path_factory.mktemp("quick")
+    run_sweep(load_sweep(sweep_file(tmp, QUICK)), tmp / "out", workers=1, pictures="none")
     return comparable(tmp / "out")
 
 
 def test_two_workers_equal_serial_bit_for_bit(tmp_path: Path, serial_fused: dict[str, Any]) -> None:
     """A 2-process pool gives every run's row and result.json exactly as the serial sweep."""
-    run_sweep(load_sweep(sweep_file(tmp_path, FUSED)), tmp_path / "out", workers=2)
+    run_sweep(load_sweep(sweep_file(tmp_path, FUSED)), tmp_path / "out", workers=2, pictures="none")
     assert comparable(tmp_path / "out") == serial_fused
 
 
 def test_ray_equals_serial_bit_for_bit(tmp_path: Path, serial_fused: dict[str, Any]) -> None:
     """A real local Ray (2 CPUs) gives every run exactly as the serial sweep."""
     pytest.importorskip("ray")
-    run_sweep(load_sweep(sweep_file(tmp_path, FUSED)), tmp_path / "out", workers=2, ray=LOCAL_RAY)
+    run_sweep(
+        load_sweep(sweep_file(tmp_path, FUSED)), tmp_path / "out", workers=2, ray=LOCAL_RAY,
+        pictures="none",
+    )  # fmt: skip
     assert comparable(tmp_path / "out") == serial_fused
 
 
@@ -108,15 +119,18 @@ def test_a_run_that_raises_is_recorded_and_the_sweep_goes_on(tmp_path: Path) -> 
     traceback = (tmp_path / "out" / "runs" / rows[1]["run_id"] / "error.txt").read_text()
     assert traceback.startswith("Traceback") and "TrackFormatError" in traceback
     assert "3 of 3 runs done: 2 clean (67%), 1 errors" in report.summary
+    for row, files in zip(rows, [["result.json", "run.png"], ["error.txt"]] * 2, strict=False):
+        assert (
+            sorted(p.name for p in (tmp_path / "out" / "runs" / row["run_id"]).iterdir()) == files
+        )
     failed = (tmp_path / "out" / "failed.md").read_text()
     assert "1 of 3 runs were not clean" in failed and "error: TrackFormatError" in failed
 
 
-def test_a_killed_worker_loses_nothing(tmp_path: Path) -> None:
+def test_a_killed_worker_loses_nothing(tmp_path: Path, serial_quick: dict[str, Any]) -> None:
     """A pool worker killed mid-sweep: the runs it may have held run again, every row once,
     the same as the serial sweep."""
     path = sweep_file(tmp_path, QUICK)
-    run_sweep(load_sweep(path), tmp_path / "serial", workers=1)
     killed: list[int] = []
 
     def kill_a_worker(row: dict[str, Any]) -> None:
@@ -125,10 +139,12 @@ def test_a_killed_worker_loses_nothing(tmp_path: Path) -> None:
             killed.append(worker.pid or 0)
             os.kill(worker.pid or 0, signal.SIGKILL)
 
-    report = run_sweep(load_sweep(path), tmp_path / "pool", workers=2, on_row=kill_a_worker)
+    report = run_sweep(
+        load_sweep(path), tmp_path / "pool", workers=2, pictures="none", on_row=kill_a_worker
+    )
     assert killed
-    assert (report.ran, report.errors) == (6, 0)
-    assert comparable(tmp_path / "pool") == comparable(tmp_path / "serial")
+    assert (report.ran, report.errors) == (4, 0)
+    assert comparable(tmp_path / "pool") == serial_quick
 
 
 def wait_for_rows(out: Path, count: int, proc: subprocess.Popen[bytes]) -> None:
@@ -143,12 +159,15 @@ def wait_for_rows(out: Path, count: int, proc: subprocess.Popen[bytes]) -> None:
 
 
 @pytest.mark.parametrize(("sig", "workers"), [(signal.SIGKILL, "2"), (signal.SIGINT, "1")])
-def test_killed_sweep_resumes(tmp_path: Path, sig: signal.Signals, workers: str) -> None:
+def test_killed_sweep_resumes(
+    tmp_path: Path, serial_quick: dict[str, Any], sig: signal.Signals, workers: str
+) -> None:
     """`conesim sweep` killed (SIGKILL to its process group, or Ctrl-C) after some rows, then
     run again: it skips those, runs the rest, no row twice, the rows of an uninterrupted sweep."""
     path = sweep_file(tmp_path, QUICK)
     out = tmp_path / "out"
     command = [*CONESIM, "sweep", str(path), "--out", str(out), "--workers", workers]
+    command += ["--pictures", "none"]
     proc = subprocess.Popen(
         command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True
     )
@@ -167,9 +186,8 @@ def test_killed_sweep_resumes(tmp_path: Path, sig: signal.Signals, workers: str)
         assert proc.returncode == 130
         assert b"interrupted; the runs finished are in" in err
     done = len((out / RESULTS).read_text().splitlines())
-    assert 2 <= done < 6
+    assert 2 <= done < 4
     again = subprocess.run(command, capture_output=True, text=True, check=False)
     assert again.returncode == 0, again.stderr
-    assert f"6 runs: {done} done before, {6 - done} run now; 6 clean" in again.stdout
-    run_sweep(load_sweep(path), tmp_path / "whole", workers=1)
-    assert comparable(out) == comparable(tmp_path / "whole")
+    assert f"4 runs: {done} done before, {4 - done} run now; 4 clean" in again.stdout
+    assert comparable(out) == serial_quick
