@@ -31,10 +31,11 @@ labels to values (named levels), or ``{range: [start, stop]}`` /
 The runs are expanded, and every run's scenario resolved and checked, when
 the file is loaded: a problem is one ``FieldError`` naming the file and
 line, before any run starts. A track file given in the sweep file is
-relative to it. Two points with the same resolved scenario are refused (a
-run twice). Each run has an id derived from its point alone (its axis
-labels and a digest of its resolved scenario), which ``conesim sweep``
-uses to skip what is done when it resumes.
+relative to it. A point given twice (the same labels, the same resolved
+scenario) is refused. A mapping whose only key is ``range`` is a range.
+Each run has an id derived from its point alone (its axis labels and a
+digest of its resolved scenario), which ``conesim sweep`` uses to skip what
+is done when it resumes.
 """
 
 from __future__ import annotations

@@ -8,9 +8,11 @@ the process it ran in, the runs before it there or the order, so every
 executor gives the same results.
 
 * ``serial``: one after the other in this process (``--workers 1``).
-* ``pool``: ``workers`` processes (started with ``spawn``: no state
-  inherited, numba's kernels loaded by each from the cache), warmed up when
-  they start (``warm_worker``) and reused for every run. At most one run per
+* ``pool``: ``workers`` processes forked from a fork server that imported
+  conesim once (``forkserver``; ``spawn`` where there is none: nothing of
+  this process's state inherited either way), warmed up when they start
+  (``warm_worker``: numba's kernels loaded from the cache) and reused for
+  every run. At most one run per
   worker is in flight, so when a worker dies (killed, out of memory) the
   runs it may have held are known: they are run again in a new pool, and a
   run in flight at ``MAX_ATTEMPTS`` deaths is recorded as an error
@@ -90,6 +92,20 @@ def serial(points: Sequence[SweepPoint], pictures: Pictures = "all") -> Results:
         yield point, run_point(point.scenario, pictures)
 
 
+PRELOAD = ["conesim.envs.sweep_workers", "conesim.envs.runner", "conesim.envs.run_plot"]
+"""What the fork server imports once, for every worker it forks."""
+
+
+def _context() -> multiprocessing.context.BaseContext:
+    """``forkserver`` where there is one (POSIX): conesim imported once, in the server,
+    the workers forked from it; else ``spawn``. Neither inherits this process's state."""
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return multiprocessing.get_context("spawn")
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(PRELOAD)
+    return context
+
+
 def _died(point: SweepPoint, deaths: int) -> Outcome:
     message = f"the worker process running it died ({deaths} times); see the sweep's log"
     return Outcome(error=RunError("WorkerDied", message, message + "\n"))
@@ -97,7 +113,7 @@ def _died(point: SweepPoint, deaths: int) -> Outcome:
 
 def pool(points: Sequence[SweepPoint], workers: int, pictures: Pictures = "all") -> Results:
     """The runs on ``workers`` local processes (see the module docstring)."""
-    context = multiprocessing.get_context("spawn")
+    context = _context()
     queue = deque(points)
     deaths: dict[str, int] = {}
     while queue:
