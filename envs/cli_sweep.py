@@ -16,10 +16,12 @@ Exit codes: 0 every run clean, 1 a run not clean or an error, 2 bad input,
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from pathlib import Path
 
 from conesim.envs.cli_parser import CliError
+from conesim.envs.paths import os_reason
 
 EXIT_OK, EXIT_FAILED, EXIT_INTERRUPTED = 0, 1, 130
 MAX_WORKERS = 1024
@@ -41,6 +43,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from conesim.envs.sweep import run_sweep  # noqa: PLC0415
     from conesim.envs.sweep_file import load_sweep  # noqa: PLC0415
     from conesim.envs.sweep_store import SweepDirError, check_sweep_dir  # noqa: PLC0415
+    from conesim.envs.sweep_workers import (  # noqa: PLC0415
+        RayStartError,
+        default_workers,
+        ray_session,
+    )
 
     sweep = load_sweep(args.sweep)
     out = Path(args.out)
@@ -50,19 +57,27 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         raise CliError(f"--out {exc}") from None
     if args.ray is not None:
         _check_ray_extra()
-    try:
-        report = run_sweep(
-            sweep, out, workers=args.workers, ray=args.ray, pictures=args.pictures,
-            stderr=sys.stderr,
-            tty=sys.stderr.isatty(),
-        )  # fmt: skip
-    except KeyboardInterrupt:
-        print(
-            f"conesim sweep: interrupted; the runs finished are in {out / 'results.jsonl'}, "
-            "and the same command resumes the sweep",
-            file=sys.stderr,
-        )
-        return EXIT_INTERRUPTED
+    with contextlib.ExitStack() as stack:
+        if args.ray is not None:  # started or reached before anything is written
+            address = None if args.ray == "local" else args.ray
+            try:
+                stack.enter_context(ray_session(args.workers or default_workers(), address))
+            except RayStartError as exc:
+                raise CliError(f"--ray: {exc}") from None
+        try:
+            report = run_sweep(
+                sweep, out, workers=args.workers, ray=args.ray, pictures=args.pictures,
+                stderr=sys.stderr, tty=sys.stderr.isatty(),
+            )  # fmt: skip
+        except KeyboardInterrupt:
+            print(
+                f"conesim sweep: interrupted; the runs finished are in {out / 'results.jsonl'}, "
+                "and the same command resumes the sweep",
+                file=sys.stderr,
+            )
+            return EXIT_INTERRUPTED
+        except OSError as exc:
+            raise CliError(f"--out {out}: cannot write the results ({os_reason(exc)})") from None
     sys.stdout.write(report.summary)
     print(
         f"\n{report.total} runs: {report.skipped} done before, {report.ran} run now; "

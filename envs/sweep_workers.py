@@ -25,6 +25,7 @@ executor gives the same results.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import multiprocessing
 import os
@@ -32,7 +33,7 @@ import signal
 import tempfile
 import traceback
 from collections import deque
-from collections.abc import Generator, Sequence
+from collections.abc import Generator, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
@@ -158,16 +159,30 @@ def _end(executor: ProcessPoolExecutor, before: set[Any]) -> None:
         process.join(5.0)
 
 
-def ray_tasks(
-    points: Sequence[SweepPoint], workers: int, address: str | None, pictures: Pictures = "all"
-) -> Results:
-    """The runs as Ray tasks (see the module docstring)."""
+class RayStartError(Exception):
+    """Ray could not be started, or the cluster reached (one line: why)."""
+
+
+def _import_ray() -> Any:
     try:
         import ray  # noqa: PLC0415
     except ImportError:
         raise DependencyNotInstalled(
             'Ray is not installed: install the ray extra, pip install "conesim[ray]"'
         ) from None
+    return ray
+
+
+@contextlib.contextmanager
+def ray_session(workers: int, address: str | None) -> Iterator[Any]:
+    """Ray, started (a local Ray of ``workers`` CPUs) or connected to (``address``)
+    unless it already is, and shut down again on exit if it was started here.
+
+    Raises:
+        RayStartError: Ray would not start, or the cluster cannot be reached.
+        gymnasium.error.DependencyNotInstalled: Ray is not installed.
+    """
+    ray = _import_ray()
     started = not ray.is_initialized()
     if started:
         options: dict[str, Any] = {
@@ -175,15 +190,28 @@ def ray_tasks(
             "logging_level": logging.WARNING,
             "log_to_driver": False,
         }
-        if address is None:
-            ray.init(num_cpus=workers, **options)
-        else:
-            ray.init(address=address, **options)
+        try:
+            if address is None:
+                ray.init(num_cpus=workers, **options)
+            else:
+                ray.init(address=address, **options)
+        except Exception as exc:  # Ray raises ConnectionError, RuntimeError, ValueError, ...
+            where = "a local Ray" if address is None else f"the Ray cluster at {address}"
+            reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+            raise RayStartError(f"cannot start or reach {where}: {reason}") from None
     try:
-        yield from _ray_loop(ray, points, workers, address, pictures)
+        yield ray
     finally:
         if started:
             ray.shutdown()
+
+
+def ray_tasks(
+    points: Sequence[SweepPoint], workers: int, address: str | None, pictures: Pictures = "all"
+) -> Results:
+    """The runs as Ray tasks (see the module docstring)."""
+    with ray_session(workers, address) as ray:
+        yield from _ray_loop(ray, points, workers, address, pictures)
 
 
 def _ray_loop(
