@@ -158,7 +158,7 @@ def wait_for_rows(out: Path, count: int, proc: subprocess.Popen[bytes]) -> None:
     raise AssertionError(f"the sweep ended or hung before {count} rows")
 
 
-@pytest.mark.parametrize(("sig", "workers"), [(signal.SIGKILL, "2"), (signal.SIGINT, "1")])
+@pytest.mark.parametrize(("sig", "workers"), [(signal.SIGKILL, "1"), (signal.SIGINT, "2")])
 def test_killed_sweep_resumes(
     tmp_path: Path, serial_quick: dict[str, Any], sig: signal.Signals, workers: str
 ) -> None:
