@@ -107,7 +107,7 @@ def _context() -> multiprocessing.context.BaseContext:
     return context
 
 
-def _died(point: SweepPoint, deaths: int) -> Outcome:
+def _died(deaths: int) -> Outcome:
     message = f"the worker process running it died ({deaths} times); see the sweep's log"
     return Outcome(error=RunError("WorkerDied", message, message + "\n"))
 
@@ -140,7 +140,7 @@ def pool(points: Sequence[SweepPoint], workers: int, pictures: Pictures = "all")
                         if deaths[point.run_id] < MAX_ATTEMPTS:
                             queue.appendleft(point)
                             continue
-                        outcome = _died(point, deaths[point.run_id])
+                        outcome = _died(deaths[point.run_id])
                     yield point, outcome
                 if broken and not running:
                     logging.getLogger(__name__).error("a worker process died; starting new ones")
