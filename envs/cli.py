@@ -19,6 +19,8 @@ Subcommands:
   (``envs.run_dir``).
 * ``conesim scenario show [SCENARIO.yaml] [--set ...] [flags]``: the scenario
   ``run`` would run, as YAML with every default filled in.
+* ``conesim sweep SWEEP.yaml --out DIR [--workers N] [--ray [ADDRESS]]`` and
+  ``conesim sweep summary DIR``: many runs (``envs.cli_sweep``).
 
 ``-v`` (log the nodes' warnings) goes before or after the subcommand.
 
@@ -39,9 +41,9 @@ import logging
 import math
 import os
 import sys
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, TextIO
+from typing import TYPE_CHECKING
 
 from gymnasium.error import DependencyNotInstalled
 
@@ -49,7 +51,8 @@ from conesim.core.geodesy import GeodesyError
 from conesim.envs.cli_parser import CliError, build_parser
 from conesim.envs.dataclass_io import FieldError
 from conesim.envs.paths import missing_dirs, nearest_existing, os_reason
-from conesim.envs.run_dir import OUTPUT_FILES, RunDirError, check_run_dir
+from conesim.envs.progress import ProgressBar
+from conesim.envs.run_dir import RunDirError, check_run_dir, write_together
 from conesim.envs.run_plot import save_run_picture
 from conesim.envs.track_plot import save_track_picture
 from conesim.envs.yaml_io import parse_value
@@ -367,50 +370,17 @@ def _check_render_extra() -> None:
 def _write_outputs(
     out: Path, payload: str, result: RunResult, track: Track, global_path: GlobalPath
 ) -> None:
-    """Write run.png and result.json into ``out``: both, or nothing.
-
-    Both go to temporary names first and are moved into place only when both
-    were written. A previous run's pair is first moved aside and put back if
-    a move fails, so ``out`` holds the new pair or the old one, never one of
-    each; directories this call created are removed on any failure. One run
-    per output directory at a time: two runs writing the same ``out`` at
-    once may still interleave their moves.
-    """
-    created = missing_dirs(out)
-    tag = f"{os.getpid()}.tmp"
-    tmp = {name: out / f".{name}.{tag}" for name in OUTPUT_FILES}
-    old = {name: out / f".{name}.old.{tag}" for name in OUTPUT_FILES}
-    aside: list[str] = []
-    moved: list[Path] = []
+    """Write run.png and result.json into ``out``: both, or nothing (``write_together``)."""
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        save_run_picture(result, track, global_path, tmp["run.png"])
-        tmp["result.json"].write_text(payload + "\n", encoding="utf-8")
-        for name in OUTPUT_FILES:
-            if (out / name).exists():
-                os.replace(out / name, old[name])
-                aside.append(name)
-        for name in OUTPUT_FILES:
-            os.replace(tmp[name], out / name)
-            moved.append(out / name)
+        write_together(
+            out,
+            {
+                "run.png": lambda path: save_run_picture(result, track, global_path, path),
+                "result.json": lambda path: path.write_text(payload + "\n", encoding="utf-8"),
+            },
+        )
     except OSError as exc:
-        for path in moved:
-            path.unlink(missing_ok=True)
-        for name in aside:
-            with contextlib.suppress(OSError):
-                os.replace(old[name], out / name)
-        _remove_temporaries(tmp.values())
-        for directory in reversed(created):
-            with contextlib.suppress(OSError):
-                directory.rmdir()
         raise CliError(f"--out {out}: cannot write the results ({os_reason(exc)})") from None
-    _remove_temporaries([*tmp.values(), *old.values()])
-
-
-def _remove_temporaries(paths: Iterable[Path]) -> None:
-    for path in paths:
-        with contextlib.suppress(OSError):
-            path.unlink(missing_ok=True)
 
 
 def format_result(
@@ -459,29 +429,6 @@ def format_result(
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
 
 
-class ProgressBar:
-    """A one-line progress bar on a terminal (simulated time against the limit)."""
-
-    def __init__(self, stream: TextIO, width: int = 30) -> None:
-        self.stream = stream
-        self.width = width
-        self._shown = -1
-
-    def update(self, t: float, limit: float) -> None:
-        """Redraw when the bar moves."""
-        filled = min(self.width, int(self.width * t / limit)) if limit > 0 else 0
-        if filled != self._shown:
-            self._shown = filled
-            bar = "#" * filled + "." * (self.width - filled)
-            self.stream.write(f"\rconesim run [{bar}] {t:6.1f} s simulated")
-            self.stream.flush()
-
-    def close(self) -> None:
-        """End the line."""
-        self.stream.write("\n")
-        self.stream.flush()
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``conesim`` console script."""
     try:
@@ -502,6 +449,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             return cmd_run(args)
         if args.command == "scenario" and args.scenario_command == "show":
             return cmd_scenario_show(args)
+        if args.command == "sweep":
+            from conesim.envs.cli_sweep import cmd_sweep  # noqa: PLC0415 (with the loop)
+
+            return cmd_sweep(args)
     except (*INPUT_ERRORS, CliError) as exc:
         for line in str(exc).splitlines() or [""]:
             print(f"conesim: error: {line}", file=sys.stderr)

@@ -144,6 +144,18 @@ def build_parser() -> argparse.ArgumentParser:
         "(ros extra)",
     )
 
+    _sweep_options(
+        sub.add_parser(
+            "sweep",
+            parents=[verbose],
+            help="run many scenarios: a base scenario and the axes to vary",
+            description="Run a sweep: a base scenario and the axes to vary (their product, or\n"
+            "a list of points), every run checked before the first starts (README: Sweeps).",
+            epilog=SWEEP_EPILOG,
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
+    )
+
     scenario = sub.add_parser(
         "scenario", parents=[verbose], help="inspect a scenario (the settings of a run)"
     )
@@ -157,3 +169,48 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _scenario_options(show_scenario)
     return parser
+
+
+SWEEP_EPILOG = """\
+conesim sweep summary DIR writes DIR's summary.md, summary.png and failed.md
+again from its results.jsonl (and prints the tables).
+
+Outputs in DIR: results.jsonl (a row per run, written as each finishes),
+runs/<run-id>/result.json and run.png (or error.txt), sweep.json, and at the
+end summary.md, summary.png and failed.md. The same command again resumes an
+interrupted sweep, skipping the runs done. Exit status: 0 every run clean,
+1 some run not clean or an error, 2 bad input, 130 interrupted (Ctrl-C)."""
+
+
+def _sweep_options(sweep: argparse.ArgumentParser) -> None:
+    """``conesim sweep SWEEP.yaml --out DIR`` and ``conesim sweep summary DIR``."""
+    sweep.add_argument(
+        "sweep", metavar="SWEEP.yaml", help="the sweep file (or 'summary', then DIR)"
+    )
+    sweep.add_argument(
+        "dir", nargs="?", metavar="DIR", help="with 'summary': the sweep's directory"
+    )
+    sweep.add_argument(
+        "--out", metavar="DIR", help="output directory: new, empty, or this sweep's (resumes it)"
+    )
+    sweep.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help="runs at once (default every core; 1 runs them in this process); "
+        "with --ray the local Ray's CPUs",
+    )
+    sweep.add_argument(
+        "--ray",
+        nargs="?",
+        const="local",
+        metavar="ADDRESS",
+        help="run on Ray: a local Ray started for the sweep, or the cluster at ADDRESS (ray extra)",
+    )
+    sweep.add_argument(
+        "--pictures",
+        choices=("all", "failed", "none"),
+        default="all",
+        help="which runs get a run.png: all (default), failed (not clean) or none; drawing "
+        "one takes longer than a short run",
+    )

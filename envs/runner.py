@@ -86,10 +86,16 @@ class RunResult:
     trace: RunTrace = field(repr=False, default_factory=RunTrace)
     scenario: dict[str, Any] = field(repr=False, default_factory=dict)
 
+    @property
+    def clean(self) -> bool:
+        """Every lap completed, no cone down or out, no excursion off the track."""
+        return self.finished and self.cones_down_or_out == 0 and self.off_track_events == 0
+
     def to_json(self) -> dict[str, Any]:
-        """The JSON-able result (the trace left out)."""
+        """The JSON-able result (the trace left out; ``clean`` added)."""
         out = asdict(self)
         out.pop("trace")
+        out["clean"] = self.clean
         return out
 
 

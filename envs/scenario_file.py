@@ -333,12 +333,30 @@ def _autopilot(value: Any, localization: str) -> AutopilotConfig | None:
     return build(AutopilotConfig, rest, base=start, path=("autopilot",), hidden=HIDDEN)
 
 
-def _absolute(track: Any, base_dir: str) -> Any:
+def absolute_track(track: Any, base_dir: str) -> Any:
     """A track file's path made absolute, relative to ``base_dir`` (a name stays one)."""
     if not isinstance(track, str) or track in shipped_tracks() or os.path.isabs(track):
         return track
     candidate = os.path.join(base_dir, track)
     return os.path.abspath(candidate) if os.path.exists(candidate) else track
+
+
+def read_scenario_file(path: str | os.PathLike[str]) -> tuple[Any, Lines]:
+    """A scenario file's mapping, its track made absolute (relative to the file), and its lines.
+
+    Raises:
+        FieldError: the file cannot be read, or is not valid YAML.
+    """
+    data, lines = read_yaml(path)
+    if isinstance(data, dict) and "track" in data:
+        data["track"] = absolute_track(data["track"], os.path.dirname(os.fspath(path)))
+    return data, lines
+
+
+def with_absolute_track(scenario: Scenario, base_dir: str = os.curdir) -> Scenario:
+    """``scenario`` with a relative track file's path made absolute from ``base_dir``."""
+    track = absolute_track(scenario.track, base_dir)
+    return scenario if track == scenario.track else dataclasses.replace(scenario, track=track)
 
 
 def load_scenario(
@@ -361,12 +379,8 @@ def load_scenario(
     source = None
     if path is not None:
         source = os.fspath(path)
-        data, lines = read_yaml(path)
-        if isinstance(data, dict) and "track" in data:
-            data["track"] = _absolute(data["track"], os.path.dirname(source))
-    scenario = scenario_from_mapping(data, overrides, source=source, lines=lines)
-    track = _absolute(scenario.track, os.curdir)
-    return scenario if track == scenario.track else dataclasses.replace(scenario, track=track)
+        data, lines = read_scenario_file(path)
+    return with_absolute_track(scenario_from_mapping(data, overrides, source=source, lines=lines))
 
 
 def scenario_to_mapping(scenario: Scenario) -> dict[str, Any]:
