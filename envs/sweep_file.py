@@ -61,7 +61,7 @@ from conesim.envs.scenario_file import (
     with_absolute_track,
 )
 from conesim.envs.yaml_io import Lines, dump_yaml, read_yaml
-from conesim.tracks import TrackFormatError, check_report, load_track
+from conesim.tracks import GeneratedTrack, TrackFormatError, check_report, load_track, track_label
 from conesim.tracks.global_path import GlobalPathError
 
 FORMAT_KEY = "conesim_sweep"
@@ -120,14 +120,16 @@ class _Value:
 
 
 def label_of(value: Any) -> str:
-    """A value as a short label: ``0.7``, ``true``, ``consumer``, ``[10.0, 12.0]``.
+    """A value as a short label, on one line: ``0.7``, ``true``, ``consumer``, ``[10.0, 12.0]``.
 
     >>> label_of(0.7), label_of(True), label_of("rtk"), label_of([1, 2]), label_of(None)
     ('0.7', 'true', 'rtk', '[1, 2]', 'null')
+    >>> label_of({"generate": {"seed": 3, "size": "small"}})
+    '{generate: {seed: 3, size: small}}'
     """
     if isinstance(value, str):
         return value
-    return dump_yaml(value).strip().removesuffix("\n...").replace("\n", " ")
+    return dump_yaml(value, flow=True).strip().removesuffix("\n...").replace("\n", " ")
 
 
 def _leaves(key: str, value: Any) -> list[tuple[str, Any]]:
@@ -302,7 +304,7 @@ def load_sweep(path: str | os.PathLike[str]) -> Sweep:
             )  # fmt: skip
         seen[run_id] = index
         points.append(SweepPoint(index, labels, scenario, run_id))
-    for track in sorted({p.scenario.track for p in points}):
+    for track in sorted({p.scenario.track for p in points}, key=track_label):
         _check_track(track, source)
     return Sweep(source, keys, tuple(points))
 
@@ -323,15 +325,15 @@ def _base(value: Any, reader: _Reader, here: str) -> tuple[Any, str, Lines]:
 
 
 @functools.cache
-def _track_errors(track: str) -> tuple[str, ...]:
+def _track_errors(track: str | GeneratedTrack) -> tuple[str, ...]:
     return tuple(check_report(load_track(track))["errors"])
 
 
-def _check_track(track: str, source: str) -> None:
+def _check_track(track: str | GeneratedTrack, source: str) -> None:
     """A track that cannot be read, or in which ``track check`` finds errors, is bad input."""
     try:
         errors = _track_errors(track)
     except (TrackFormatError, GlobalPathError, OSError) as exc:
         raise FieldError(("track",), str(exc), source) from None
     if errors:
-        raise FieldError(("track",), f"{track}: {errors[0]}", source)
+        raise FieldError(("track",), f"{track_label(track)}: {errors[0]}", source)
