@@ -289,18 +289,12 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         Raises:
             ValueError: the action is not two finite numbers.
         """
-        try:
-            a0, a1 = (float(v) for v in np.asarray(action, dtype=np.float32).reshape(-1))
-        except ValueError:
-            shape = np.shape(action)
+        values = np.asarray(action, dtype=np.float32)
+        if values.shape != (2,):
             raise ValueError(
-                f"action must have shape (2,) (steering, acceleration), got shape {shape}"
-            ) from None
-        if np.ndim(action) != 1:
-            raise ValueError(
-                "action must have shape (2,) (steering, acceleration), "
-                f"got shape {np.shape(action)}"
+                f"action must have shape (2,) (steering, acceleration), got shape {values.shape}"
             )
+        a0, a1 = values.tolist()
         if not (math.isfinite(a0) and math.isfinite(a1)):
             raise ValueError(f"action must be finite, got {action!r}")
         low, high = self._low, self._high

@@ -89,6 +89,8 @@ YAW_STD_SCALE = 0.1  # [rad]
 AGE_SCALE = 1.0  # [s]
 VECTOR_EGO_LOW = np.array([-1.0, -2.0, -1.0, -1.0, 0.0, 0.0, 0.0, 0.0], dtype=np.float32)
 VECTOR_EGO_HIGH = np.array([2.0, 2.0, 1.0, 1.0, 1.0, 3.0, 3.0, 1.0], dtype=np.float32)
+_EGO_LOW = VECTOR_EGO_LOW.tolist()
+_EGO_HIGH = VECTOR_EGO_HIGH.tolist()
 _SIDE = {"blue": 1.0, "yellow": -1.0}
 _ORANGE = {"orange": 1.0, "big_orange": 1.0}
 
@@ -232,7 +234,7 @@ def build_vector(
     """
     speed, yaw_rate, pos_std, yaw_std = _motion(memory, estimate)
     det = memory.detections
-    age = AGE_SCALE if det is None else (now - det.header.stamp) / AGE_SCALE
+    age = 1.0 if det is None else (now - det.header.stamp) / AGE_SCALE
     ego = (
         speed / SPEED_SCALE,
         yaw_rate / YAW_RATE_SCALE,
@@ -244,10 +246,10 @@ def build_vector(
         age if math.isfinite(age) else 1.0,
     )
     out = np.empty(VECTOR_EGO_SIZE + VECTOR_CONE_SIZE * max_cones, dtype=np.float32)
-    out[:VECTOR_EGO_SIZE] = ego
-    # np.clip's values, without its wrapper's cost
-    head = out[:VECTOR_EGO_SIZE]
-    np.minimum(np.maximum(head, VECTOR_EGO_LOW, out=head), VECTOR_EGO_HIGH, out=head)
+    # clipped as plain floats: np.clip's wrapper costs more than the rest
+    out[:VECTOR_EGO_SIZE] = [
+        min(max(v, lo), hi) for v, lo, hi in zip(ego, _EGO_LOW, _EGO_HIGH, strict=True)
+    ]
     out[VECTOR_EGO_SIZE:] = memory.vector_cones(max_cones, max_range)
     return out
 
