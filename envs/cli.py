@@ -6,6 +6,8 @@ Subcommands:
 * ``conesim track show NAME|PATH --out FILE.png``: a picture of the cones by kind
   and the global path coloured by covariance status.
 * ``conesim track check NAME|PATH [--json]``: the Formula Student validator.
+* ``conesim track generate --seed S --out FILE [--size ...]``: a random
+  FS-rule track (``tracks.generate``), written in the conesim format.
 * ``conesim run [SCENARIO.yaml] [--set KEY=VALUE ...] [flags]``: one
   headless closed-loop scenario (``envs.runner``): a results table,
   ``DIR/result.json`` and ``DIR/run.png``; with ``--bag BAG`` also a ROS 2
@@ -55,9 +57,14 @@ from conesim.tracks import (
     DEFAULT_TRACK,
     Track,
     TrackFormatError,
+    TrackSource,
+    TrackSpec,
     check_report,
+    generate_track,
     load_track,
     shipped_tracks,
+    track_label,
+    write_track,
 )
 from conesim.tracks.global_path import (
     GlobalPath,
@@ -96,9 +103,9 @@ def cmd_tracks() -> int:
     return EXIT_OK
 
 
-def _load_track(name: str, option: str) -> Track:
+def _load_track(name: TrackSource, option: str) -> Track:
     """``load_track`` that refuses an empty name (which would read the current directory)."""
-    if not name.strip():
+    if not track_label(name).strip():
         raise CliError(f"{option}: empty track name; give a shipped track name or a track file")
     return load_track(name)
 
@@ -150,6 +157,53 @@ def cmd_track_check(name: str, as_json: bool) -> int:
             print(f"error: {error}")
         if not report["warnings"] and not report["errors"]:
             print("ok: no warnings, no errors")
+    return EXIT_FAILED if report["errors"] else EXIT_OK
+
+
+GENERATE_FLAGS = {
+    "size": "size",
+    "length": "length",
+    "width": "width",
+    "hairpins": "hairpins",
+    "tight_share": "tight_share",
+    "min_radius": "min_radius",
+    "gate_offset": "gate_offset",
+}
+"""``track generate``'s flags and the ``TrackSpec`` field each sets."""
+
+
+def cmd_track_generate(args: argparse.Namespace) -> int:
+    """Generate a track, write it, and print what it is and what ``track check`` finds."""
+    out = args.out
+    if not out.strip():
+        raise CliError("--out: empty file name; give a .yaml file name")
+    target = Path(out)
+    if target.is_dir():
+        raise CliError(f"--out {out}: is a directory; give a .yaml file name")
+    if not 0 <= args.seed < 2**63:
+        raise CliError(f"--seed {args.seed}: must be a non-negative integer below 2**63")
+    given = {field: getattr(args, flag) for flag, field in GENERATE_FLAGS.items()}
+    try:
+        spec = TrackSpec(**{k: v for k, v in given.items() if v is not None})
+    except ValueError as exc:
+        named = [f for f, field in GENERATE_FLAGS.items() if f"TrackSpec.{field} " in str(exc)]
+        flag = f"--{named[0].replace('_', '-')}: " if named else ""
+        raise CliError(f"{flag}{exc}") from None
+    track = generate_track(args.seed, spec)
+    try:
+        written = write_track(track, target)
+    except OSError as exc:
+        raise CliError(f"--out {out}: cannot write the track ({os_reason(exc)})") from None
+    report = check_report(track)
+    print(
+        f"wrote {written}: {track.name}, {report['length_m']:.1f} m, width "
+        f"{report['width_min_m']:.2f}-{report['width_max_m']:.2f} m, {len(track.cones)} cones"
+    )
+    print(track.description)
+    for warning in report["warnings"]:
+        print(f"warning: {warning}")
+    for error in report["errors"]:
+        print(f"error: {error}")
     return EXIT_FAILED if report["errors"] else EXIT_OK
 
 
@@ -237,7 +291,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     global_path = global_path_for_track(track)
     errors = check_report(track)["errors"]
     if errors:
-        raise CliError("\n".join(f"{scenario.track}: {error}" for error in errors))
+        raise CliError("\n".join(f"{scenario.track_name}: {error}" for error in errors))
     out = Path(args.out)
     try:
         check_run_dir(
@@ -442,6 +496,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return cmd_track_show(args.track, args.out)
         if args.command == "track" and args.track_command == "check":
             return cmd_track_check(args.track, args.json)
+        if args.command == "track" and args.track_command == "generate":
+            return cmd_track_generate(args)
         if args.command == "run":
             return cmd_run(args)
         if args.command == "scenario" and args.scenario_command == "show":

@@ -10,10 +10,11 @@ heavy: ``conesim tracks`` and ``--help`` stay fast.
 from __future__ import annotations
 
 import argparse
-from typing import NoReturn
+from typing import NoReturn, get_args
 
 from conesim.localization.modes import LOCALIZATION_MODES
 from conesim.sim.sensors import PROFILES as SENSOR_PROFILES
+from conesim.tracks.generate.spec import Size
 
 VERBOSE_HELP = "log the nodes' warnings (rejected messages)"
 
@@ -86,6 +87,41 @@ def build_parser() -> argparse.ArgumentParser:
     )
     check.add_argument("track", help="shipped track name or a track file")
     check.add_argument("--json", action="store_true", help="print one JSON object")
+    generate = track_sub.add_parser(
+        "generate",
+        parents=[verbose],
+        help="generate a random FS-rule track and write it as a conesim track file",
+        description="Generate a random closed FS-rule track (the same seed and settings "
+        "give the same cones, always) and write it in the conesim format.",
+    )
+    generate.add_argument("--seed", type=int, required=True, help="the generator's seed")
+    generate.add_argument("--out", required=True, help="the track file to write (.yaml)")
+    generate.add_argument(
+        "--size", choices=list(get_args(Size)), default="medium",
+        help="lap length 200-280 m (small), 280-380 m (medium, default), 380-500 m (large)",
+    )  # fmt: skip
+    generate.add_argument(
+        "--length", type=float, nargs=2, metavar=("MIN", "MAX"), help="lap length range [m]"
+    )
+    generate.add_argument(
+        "--width", type=float, nargs=2, metavar=("MIN", "MAX"),
+        help="lane width range [m] (default 3.0 3.5; FS: >= 3 m)",
+    )  # fmt: skip
+    generate.add_argument(
+        "--hairpins", type=int, nargs=2, metavar=("MIN", "MAX"), help="how many hairpins"
+    )
+    generate.add_argument(
+        "--tight-share", type=float,
+        help="share of hairpins tighter than 4.5 m lane-centre radius, down to --min-radius "
+        "(default 0.25)",
+    )  # fmt: skip
+    generate.add_argument(
+        "--min-radius", type=float, help="tightest lane-centre radius [m] (default 3.0)"
+    )
+    generate.add_argument(
+        "--gate-offset", type=float, nargs=2, metavar=("MIN", "MAX"),
+        help="how far the big orange gate cones stand outside the lane [m] (default 0.5 1.2)",
+    )  # fmt: skip
 
     run = sub.add_parser(
         "run",

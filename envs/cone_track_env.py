@@ -107,6 +107,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
@@ -123,7 +124,7 @@ from conesim.envs.scenario import Localization
 from conesim.planner.messages import ControlCommand
 from conesim.sim.events import RaceStanding
 from conesim.sim.sensors import SensorProfile, get_profile
-from conesim.tracks import Track, load_track
+from conesim.tracks import GeneratedTrack, Track, TrackSource, load_track
 
 ObsType = NDArray[np.float32] | dict[str, NDArray[np.float32]]
 RESET_OPTIONS = ("track", "sensors", "localization", "start_pose")
@@ -154,7 +155,7 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         # One frame per action: the recorded or shown video runs in real time.
         self.metadata = {**self.metadata, "render_fps": round(self.config.control_rate)}
         cfg = self.config
-        self._track_cache: dict[str, Track] = {}
+        self._track_cache: dict[TrackSource, Track] = {}
         self.loop = self._build_loop(cfg.track, cfg.sensors, cfg.localization)
         p = self.loop.world_config.vehicle
         if cfg.action == "centred":
@@ -313,18 +314,18 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         return -self._low[1] * self._scale[1]
 
     def _build_loop(
-        self, track_name: str, sensors: SensorProfile | str, localization: Localization
+        self, track_name: TrackSource, sensors: SensorProfile | str, localization: Localization
     ) -> ClosedLoop:
         """A loop for one episode: the env's scenario with this track, sensors, localization."""
         scenario = dataclasses.replace(
             self.config.to_scenario(),
-            track=track_name,
+            track=track_name if isinstance(track_name, GeneratedTrack) else os.fspath(track_name),
             sensors=sensors if isinstance(sensors, SensorProfile) else get_profile(sensors),
             localization=localization,
         )
         return scenario.closed_loop(self._track(track_name), rules=self.config.rules)
 
-    def _track(self, name: str) -> Track:
+    def _track(self, name: TrackSource) -> Track:
         if name not in self._track_cache:
             self._track_cache[name] = load_track(name)
         return self._track_cache[name]

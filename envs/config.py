@@ -27,14 +27,14 @@ import numpy as np
 from conesim.envs.dataclass_io import build
 from conesim.envs.loop import EpisodeRules
 from conesim.envs.scenario import EkfTuning, Localization, Scenario
-from conesim.envs.scenario_file import load_scenario
+from conesim.envs.scenario_file import load_scenario, track_from_data
 from conesim.localization.ekf import EkfConfig
 from conesim.localization.modes import LOCALIZATION_MODES
 from conesim.planner import AutopilotConfig
 from conesim.sim.sensors import PROFILES as SENSOR_PROFILES
 from conesim.sim.sensors import Faults, SensorProfile, get_profile
 from conesim.sim.vehicle_params import VehicleParams
-from conesim.tracks import DEFAULT_TRACK
+from conesim.tracks import DEFAULT_TRACK, GeneratedTrack
 
 OBSERVATION_MODES = ("vector", "dict")
 ACTION_MODES = ("centred", "physical")
@@ -80,7 +80,8 @@ class EnvConfig:
     """Settings of ``conesim/ConeTrack-v0``.
 
     Attributes:
-        track: shipped track name or a track file.
+        track: shipped track name or a track file, or a generated track: a
+            ``GeneratedTrack`` or ``{"generate": {"seed": S, ...}}``.
         sensors: sensor profile, or a shipped one's name (``ideal``, ``rtk``,
             ``consumer``, ``consumer_white``).
         localization: ``fused`` (EKF), ``raw`` (the ROS pipeline's) or ``truth``.
@@ -111,7 +112,7 @@ class EnvConfig:
             (None: the localization's default); the env itself has no driver.
     """
 
-    track: str = DEFAULT_TRACK
+    track: str | GeneratedTrack = DEFAULT_TRACK
     sensors: str = "rtk"
     localization: Localization = "fused"
     laps: int = 1
@@ -144,8 +145,15 @@ class EnvConfig:
         _choice("observation", self.observation, OBSERVATION_MODES)
         _choice("action", self.action, ACTION_MODES)
         _choice("info", self.info, INFO_MODES)
-        if not (isinstance(self.track, str | os.PathLike) and os.fspath(self.track)):
-            raise ValueError(f"EnvConfig.track must be a track name or file, got {self.track!r}")
+        if isinstance(self.track, Mapping):  # {generate: {seed: S, ...}}, as in a scenario file
+            object.__setattr__(self, "track", track_from_data(self.track, ("EnvConfig.track",)))
+        if not isinstance(self.track, GeneratedTrack) and not (
+            isinstance(self.track, str | os.PathLike) and os.fspath(self.track)
+        ):
+            raise ValueError(
+                f"EnvConfig.track must be a track name or file, a GeneratedTrack or "
+                f"{{generate: {{seed: S, ...}}}}, got {self.track!r}"
+            )
         if not (_is_int(self.laps) and self.laps >= 1):
             raise ValueError(f"EnvConfig.laps must be an integer >= 1, got {self.laps!r}")
         if not (_is_int(self.max_cones) and 1 <= self.max_cones <= 512):
@@ -185,8 +193,9 @@ class EnvConfig:
             raise ValueError(f"EnvConfig.time_limit must be > 0 [s], got {self.time_limit!r}")
         # Plain Python values from here: a numpy float32 rate would make the
         # simulation clock float32 and the same seed give another run.
+        track = self.track
         plain = {
-            "track": os.fspath(self.track),
+            "track": track if isinstance(track, GeneratedTrack) else os.fspath(track),
             "laps": int(self.laps),
             "max_cones": int(self.max_cones),
             "control_rate": float(self.control_rate),
