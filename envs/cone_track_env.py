@@ -58,7 +58,13 @@ still to come and an earlier end pays no time).
 
 ## Starting State
 The car stands still at the track's start pose (behind the start line), at
-t = 0, sensors and filter freshly reset with the episode seed.
+t = 0, sensors and filter freshly reset with the episode seed. With
+``track="random"`` each episode's track is generated (``tracks.generate``,
+``track_spec``: medium, 280-380 m, by default) from a seed drawn from
+``track_seeds`` (default ``range(1000)``; a ``range`` or a pair ``(lo, hi)``)
+with the episode's generator, so ``reset(seed=s)`` always gives the same
+track; ``info["track_seed"]`` names it. Train on ``track_seeds=(0, 1000)``
+and test on ``(1000, 1100)``: a policy then meets tracks it never saw.
 
 ## Episode End
 Terminated when the requested laps are complete (an open lane such as
@@ -77,13 +83,15 @@ registered ``max_episode_steps`` is a backstop behind the env's own limit.
 numeric arrays: ``t`` [s], ``progress_m``, ``speed`` (true, [m/s]),
 ``laps_completed``, ``lap_time`` (the last lap's [s], 0 before one),
 ``cones_hit``, ``cones_down_or_out``, ``off_track_events``, ``end_reason``
-(0 while running, ``END_REASONS``) and ``reward_terms``. ``info="full"``
+(0 while running, ``END_REASONS``), ``track_seed`` (the generated track's
+seed, -1 for another track) and ``reward_terms``. ``info="full"``
 adds ``lap_times``, ``truth`` (the antenna's pose, speed, steering),
 ``localization_error`` and ``messages`` (every measurement delivered in the
 step).
 
 ## Arguments
-``gymnasium.make("conesim:conesim/ConeTrack-v0", track="autocross", sensors="rtk",
+``gymnasium.make("conesim:conesim/ConeTrack-v0", track="autocross" (or "random",
+with track_seeds=(0, 1000) and track_spec={"size": "small"}), sensors="rtk",
 localization="fused", laps=1, control_rate=50, observation="vector",
 action="centred", info="lean", stuck_time=10, stuck_progress=1,
 stuck_grace=15, terminate_off_track=True, time_limit=None,
@@ -99,8 +107,8 @@ values out of range raise, naming them. ``reset(options=...)`` takes
 * v0: first release (conesim 0.1.0, unreleased: its dict observation grew
   ``pose_valid`` and ``cones_age``; then the centred action, the normalised
   vector observation, the lean info, the FS-rate reward and the stuck
-  rule's grace came, all before any release; a change after one gets a new
-  version).
+  rule's grace and the random tracks came, all before any release; a change
+  after one gets a new version).
 """
 
 from __future__ import annotations
@@ -116,7 +124,7 @@ from numpy.typing import NDArray
 
 from conesim.core.geodesy import GeodesyError
 from conesim.core.pose import Pose2D
-from conesim.envs.config import EnvConfig
+from conesim.envs.config import RANDOM_TRACK, EnvConfig
 from conesim.envs.loop import Broadcast, ClosedLoop, EndReason, StepRecord, world_seed
 from conesim.envs.observation import SensorMemory, build_dict, build_vector, observation_space
 from conesim.envs.render import Renderer, Scene, SceneKeeper
@@ -124,7 +132,7 @@ from conesim.envs.scenario import Localization
 from conesim.planner.messages import ControlCommand
 from conesim.sim.events import RaceStanding
 from conesim.sim.sensors import SensorProfile, get_profile
-from conesim.tracks import GeneratedTrack, Track, TrackSource, load_track
+from conesim.tracks import GeneratedTrack, Track, TrackGenerationError, TrackSource, load_track
 
 ObsType = NDArray[np.float32] | dict[str, NDArray[np.float32]]
 RESET_OPTIONS = ("track", "sensors", "localization", "start_pose")
@@ -132,6 +140,8 @@ REWARD_TERMS = ("progress", "time", "cone_hit", "cone_doo", "off_track", "lap")
 END_REASONS = ("", *(str(r) for r in EndReason))
 """``info["end_reason"]`` indexes this: 0 while the episode runs, then its ``EndReason``."""
 _END_CODES = {r: k for k, r in enumerate(EndReason, start=1)}
+TRACK_CACHE_SIZE = 64  # tracks kept loaded (generated ones take ~0.1 s to make)
+GENERATION_TRIES = 10  # seeds tried in turn when the generator gives one up
 
 
 class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
@@ -141,6 +151,8 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         loop: the closed loop of the current episode (public: its ``record``,
             ``localizer.frames`` and ``global_path`` serve a driver such as
             ``AutopilotExpert``).
+        track_seed: the current episode's generated track's seed, -1 when
+            the track is not generated.
     """
 
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 20}  # noqa: RUF012
@@ -156,7 +168,9 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         self.metadata = {**self.metadata, "render_fps": round(self.config.control_rate)}
         cfg = self.config
         self._track_cache: dict[TrackSource, Track] = {}
-        self.loop = self._build_loop(cfg.track, cfg.sensors, cfg.localization)
+        first = self._generated(0) if cfg.track == RANDOM_TRACK else cfg.track
+        self.track_seed = _generator_seed(first)
+        self.loop = self._build_loop(first, cfg.sensors, cfg.localization)
         p = self.loop.world_config.vehicle
         if cfg.action == "centred":
             self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
@@ -208,7 +222,10 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         rng_state = None if rng is None else rng.bit_generator.state
         super().reset(seed=seed)
         try:
-            loop = self._build_loop(chosen.track, chosen.sensors, chosen.localization)
+            track = chosen.track
+            if track == RANDOM_TRACK:
+                track = self._generated(int(self.np_random.integers(len(cfg.track_seeds))))
+            loop = self._build_loop(track, chosen.sensors, chosen.localization)
             record = loop.reset(world_seed(self.np_random), start_pose)
             if start_pose is not None and loop.world.race.is_off_track_at(start_pose):
                 raise ValueError(
@@ -224,6 +241,7 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
                 raise ValueError(f"reset option start_pose {pose!r}: {exc}") from None
             raise
         self.loop = loop
+        self.track_seed = _generator_seed(track)
         self._command = (0.0, 0.0)
         self._memory = SensorMemory()
         self._broadcast = None
@@ -326,9 +344,28 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         return scenario.closed_loop(self._track(track_name), rules=self.config.rules)
 
     def _track(self, name: TrackSource) -> Track:
-        if name not in self._track_cache:
-            self._track_cache[name] = load_track(name)
-        return self._track_cache[name]
+        cache = self._track_cache
+        if name not in cache:
+            if len(cache) >= TRACK_CACHE_SIZE:  # the oldest goes (random tracks)
+                del cache[next(iter(cache))]
+            cache[name] = load_track(name)
+        return cache[name]
+
+    def _generated(self, index: int) -> GeneratedTrack:
+        """The generated track of ``track_seeds[index]``, or of the next seed
+        that makes one (a seed for which the generator gives up is skipped)."""
+        seeds = self.config.track_seeds
+        for k in range(min(len(seeds), GENERATION_TRIES)):
+            seed = seeds[(index + k) % len(seeds)]
+            source = GeneratedTrack(seed, self.config.track_spec)
+            try:
+                self._track(source)
+            except TrackGenerationError:
+                continue
+            return source
+        raise TrackGenerationError(
+            f"track_seeds {seeds}: no track from {GENERATION_TRIES} seeds from index {index} on"
+        )
 
     def _take(self, record: StepRecord) -> None:
         """Keep what the observation, the info and the picture need from a record."""
@@ -397,6 +434,7 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
             "cones_down_or_out": race.cones_down_or_out,
             "off_track_events": race.off_track_events,
             "end_reason": 0 if record.end is None else _END_CODES[record.end],
+            "track_seed": self.track_seed,
             "reward_terms": terms,
         }
         if self.config.info == "lean":
@@ -432,6 +470,11 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
             raise gym.error.ResetNeeded("call reset() before render()")
         loop = self.loop
         return self._scenes.scene(loop.localizer.frames, loop.localizer.estimate(loop.time))
+
+
+def _generator_seed(track: TrackSource) -> int:
+    """A generated track's seed, -1 for any other track (``info["track_seed"]``)."""
+    return track.seed if isinstance(track, GeneratedTrack) else -1
 
 
 def _start_pose_option(value: Any) -> Pose2D | None:

@@ -34,9 +34,11 @@ from conesim.planner import AutopilotConfig
 from conesim.sim.sensors import PROFILES as SENSOR_PROFILES
 from conesim.sim.sensors import Faults, SensorProfile, get_profile
 from conesim.sim.vehicle_params import VehicleParams
-from conesim.tracks import DEFAULT_TRACK, GeneratedTrack
+from conesim.tracks import DEFAULT_TRACK, GeneratedTrack, TrackSpec
 
 OBSERVATION_MODES = ("vector", "dict")
+RANDOM_TRACK = "random"
+"""``track="random"``: a generated track per episode, its seed drawn from ``track_seeds``."""
 ACTION_MODES = ("centred", "physical")
 INFO_MODES = ("lean", "full")
 
@@ -81,7 +83,14 @@ class EnvConfig:
 
     Attributes:
         track: shipped track name or a track file, or a generated track: a
-            ``GeneratedTrack`` or ``{"generate": {"seed": S, ...}}``.
+            ``GeneratedTrack`` or ``{"generate": {"seed": S, ...}}``; or
+            ``"random"``: a generated track per episode.
+        track_seeds: the generator's seeds ``track="random"`` draws from,
+            one per episode, uniformly with the episode's generator: a
+            ``range`` or a pair ``(lo, hi)``, ``lo`` included and ``hi``
+            not (train on ``(0, 1000)``, test on ``(1000, 1100)``).
+        track_spec: the generated tracks' settings (``tracks.TrackSpec``, or
+            a mapping of its fields).
         sensors: sensor profile, or a shipped one's name (``ideal``, ``rtk``,
             ``consumer``, ``consumer_white``).
         localization: ``fused`` (EKF), ``raw`` (the ROS pipeline's) or ``truth``.
@@ -113,6 +122,8 @@ class EnvConfig:
     """
 
     track: str | GeneratedTrack = DEFAULT_TRACK
+    track_seeds: range | tuple[int, int] = range(1000)
+    track_spec: TrackSpec = dataclasses.field(default_factory=TrackSpec)
     sensors: str = "rtk"
     localization: Localization = "fused"
     laps: int = 1
@@ -138,7 +149,14 @@ class EnvConfig:
     def __post_init__(self) -> None:
         if not isinstance(self.sensors, SensorProfile):
             _choice("sensors", self.sensors, tuple(SENSOR_PROFILES))
-        for name, cls in (("faults", Faults), ("vehicle", VehicleParams), ("ekf", EkfConfig)):
+        object.__setattr__(self, "track_seeds", _seed_range(self.track_seeds))
+        parts = (
+            ("faults", Faults),
+            ("vehicle", VehicleParams),
+            ("ekf", EkfConfig),
+            ("track_spec", TrackSpec),
+        )
+        for name, cls in parts:
             if isinstance(getattr(self, name), Mapping):
                 object.__setattr__(self, name, build(cls, getattr(self, name), path=(name,)))
         _choice("localization", self.localization, LOCALIZATION_MODES)
@@ -282,6 +300,24 @@ SCENARIO_FIELDS = {
 def scenario_settings(scenario: Scenario) -> dict[str, Any]:
     """The ``EnvConfig`` keys a scenario sets (all but its seed)."""
     return {key: getattr(scenario, field) for key, field in SCENARIO_FIELDS.items()}
+
+
+def _seed_range(value: Any) -> range:
+    """``track_seeds`` as a range: a range or a pair (lo, hi) of seeds, lo < hi."""
+    if isinstance(value, range):
+        seeds = value
+    elif isinstance(value, tuple | list) and len(value) == 2 and all(_is_int(v) for v in value):
+        seeds = range(int(value[0]), int(value[1]))
+    else:
+        raise ValueError(
+            f"EnvConfig.track_seeds must be a range or a pair (lo, hi) of integers, got {value!r}"
+        )
+    if len(seeds) == 0 or min(seeds[0], seeds[-1]) < 0 or max(seeds[0], seeds[-1]) >= 2**63:
+        raise ValueError(
+            f"EnvConfig.track_seeds = {value!r} is out of range: allowed a non-empty range "
+            "of seeds in [0, 2**63)"
+        )
+    return seeds
 
 
 def _weights(weights: Mapping[str, Any]) -> RewardWeights:

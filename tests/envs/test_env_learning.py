@@ -205,3 +205,29 @@ def test_lean_info_is_small_and_stacks_into_numbers() -> None:
         assert infos["reward_terms"]["time"].shape == (2,)
     finally:
         vec.close()
+
+
+def test_random_tracks_are_drawn_per_episode_from_the_seed_range() -> None:
+    """track="random": each reset generates a track from track_seeds
+    (info["track_seed"]), the same reset seed the same track and episode,
+    a test range's tracks never a training range's; a reset option's fixed
+    track has track_seed -1. gymnasium's checker passes (its determinism
+    checks included)."""
+    train = ConeTrackEnv(track="random", track_seeds=(0, 1000), time_limit=1.0)
+    test = ConeTrackEnv(track="random", track_seeds=range(1000, 1100), time_limit=1.0)
+    seen = {train.reset(seed=s)[1]["track_seed"] for s in range(4)}
+    held_out = {test.reset(seed=s)[1]["track_seed"] for s in range(4)}
+    assert len(seen) == 4 and all(0 <= s < 1000 for s in seen)
+    assert all(1000 <= s < 1100 for s in held_out)
+    obs, info = test.reset(seed=7)
+    again, info_again = ConeTrackEnv(track="random", track_seeds=(1000, 1100)).reset(seed=7)
+    assert info["track_seed"] == info_again["track_seed"] and np.array_equal(obs, again)
+    assert test.loop.track.name == f"generated-medium-{info['track_seed']}"
+    _, info = test.reset(seed=7, options={"track": "autocross"})
+    assert info["track_seed"] == -1 and test.loop.track.name == "autocross"
+    check_env(
+        ConeTrackEnv(track="random", track_seeds=(5, 8), time_limit=1.0), skip_render_check=True
+    )
+    for bad in ((5, 5), (1.5, 3.0), "0-1000", range(-1, 3)):
+        with pytest.raises(ValueError, match=r"EnvConfig\.track_seeds"):
+            ConeTrackEnv(track="random", track_seeds=bad)
