@@ -6,21 +6,23 @@ scaled to order 1 and clipped to the space's bounds::
     [speed, yaw_rate, steer, accel, pose_valid, pos_std, yaw_std, cones_age,
      x_1, y_1, m_1, side_1, orange_1, ..., x_K, y_K, m_K, side_K, orange_K]
 
-=============  ==========================================  ===========  ============
-entry          what                                        scale        bounds
-=============  ==========================================  ===========  ============
-speed          estimated forward speed                     / 20 m/s     [-1, 2]
-yaw_rate       estimated yaw rate                          / 2 rad/s    [-2, 2]
-steer, accel   the previous action's command               / the action's scale  [-1, 1]
-pose_valid     1 once localization has a pose, else 0      -            {0, 1}
-pos_std        EKF 1-sigma position, sqrt(sx^2 + sy^2)     / 1 m        [0, 3]
-yaw_std        EKF 1-sigma heading                         / 0.1 rad    [0, 3]
-cones_age      now minus the detection's capture stamp     / 1 s        [0, 1]
-x_i, y_i       detected cone in ``os_sensor``, nearest 1st  / max_range  [-1, 1]
-m_i            1 for a detected cone, 0 for padding        -            {0, 1}
-side_i         +1 blue (left), -1 yellow (right), else 0   -            {-1, 0, 1}
-orange_i       1 for an orange or big orange cone          -            {0, 1}
-=============  ==========================================  ===========  ============
+============  ===========================================  =========  ==========
+entry         what                                         scale      bounds
+============  ===========================================  =========  ==========
+speed         estimated forward speed                      20 m/s     [-1, 2]
+yaw_rate      estimated yaw rate                           2 rad/s    [-2, 2]
+steer, accel  the previous command (below)                 (below)    [-1, 1]
+pose_valid    1 once localization has a pose, else 0       -          {0, 1}
+pos_std       EKF 1-sigma position, sqrt(sx^2 + sy^2)      1 m        [0, 3]
+yaw_std       EKF 1-sigma heading                          0.1 rad    [0, 3]
+cones_age     now minus the detection's capture stamp      1 s        [0, 1]
+x_i, y_i      detected cone in ``os_sensor``, nearest 1st  max_range  [-1, 1]
+m_i           1 for a detected cone, 0 for padding         -          {0, 1}
+side_i        +1 blue (left), -1 yellow (right), else 0    -          {-1, 0, 1}
+orange_i      1 for an orange or big orange cone           -          {0, 1}
+============  ===========================================  =========  ==========
+
+Each entry is its value divided by its scale, then clipped to its bounds.
 
 * speed and yaw rate are the EKF's estimate in ``fused`` mode once it has
   one, otherwise the last wheel-speed and gyro messages (what the car
@@ -35,8 +37,6 @@ orange_i       1 for an orange or big orange cone          -            {0, 1}
 * ``max_range`` is the cone detector's (rtk: 15 m); padded cones are zeros;
   a colour-blind detection or an ``unknown`` cone has side and orange 0;
   ``cones_age`` is 1 before the first detection.
-
-The raw units of every value are dict mode's.
 
 Dict mode (raw units, as before the vector mode was normalised): ``ego`` is
 ``[speed, yaw_rate, steer_cmd, accel_cmd, pos_std, yaw_std]`` [m/s, rad/s,
