@@ -20,7 +20,7 @@ import numbers
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal, get_args
 
 import numpy as np
 
@@ -39,8 +39,10 @@ from conesim.tracks import DEFAULT_TRACK, GeneratedTrack, TrackSpec
 OBSERVATION_MODES = ("vector", "dict")
 RANDOM_TRACK = "random"
 """``track="random"``: a generated track per episode, its seed drawn from ``track_seeds``."""
-ACTION_MODES = ("centred", "physical")
-INFO_MODES = ("lean", "full")
+ActionMode = Literal["centred", "physical"]
+InfoMode = Literal["lean", "full"]
+ACTION_MODES: tuple[str, ...] = get_args(ActionMode)
+INFO_MODES: tuple[str, ...] = get_args(InfoMode)
 
 
 @dataclass(frozen=True)
@@ -132,8 +134,8 @@ class EnvConfig:
     time_limit: float | None = None  # [s]
     max_cones: int = 32
     observation: str = "vector"
-    action: str = "centred"
-    info: str = "lean"
+    action: ActionMode = "centred"
+    info: InfoMode = "lean"
     terminate_off_track: bool = True
     terminate_stuck: bool = True
     stuck_time: float = 10.0  # [s]
