@@ -52,9 +52,9 @@ scores them, faster and cleaner always paying more. On trackdrive (270 m): a
 clean lap at 5 m/s returns 270 - 54 = 216, at 10 m/s 243, at 10 m/s with a
 cone down 241, the same as a clean lap 2 s slower. Progress dominates: every
 second of driving faster than 1 m/s pays, so a crawl earns more than
-standing still (-1 per second, -15 before the stuck rule ends it), and any
-completed lap more than an episode that ends early (it has the progress
-still to come and an earlier end pays no time).
+standing still (-1 per second, -15 before the stuck rule ends it), and an
+episode that ends early (off the track, stuck) forfeits the progress still
+to come: leaving the track costs the 10 s penalty plus the rest of the lap.
 
 ## Starting State
 The car stands still at the track's start pose (behind the start line), at
