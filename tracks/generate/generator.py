@@ -34,16 +34,21 @@ import math
 from collections import Counter
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from conesim.tracks.generate.centreline import STEP, LoopClosureError
+from conesim.tracks.generate.centreline import STEP, LoopClosureError, resize_to_close
 from conesim.tracks.generate.layout import random_layout
-from conesim.tracks.generate.loop import LoopCentreline, loop_centreline, loop_cones, start_pose
+from conesim.tracks.generate.loop import loop_centreline, loop_cones, start_pose
 from conesim.tracks.generate.spec import GeneratedTrack, TrackGenerationError, TrackSpec
 from conesim.tracks.kinds import Layout
 from conesim.tracks.model import Track
 
+FloatArray = NDArray[np.float64]
+
 CHECK_SPACING = 0.5  # [m] the clearance check's sampling of the centreline
+COARSE_STEP = 0.5  # [m] the first, coarse closure of a layout
+SPACING_WINDOW_M = 6.0  # [m] cone spacing follows the tightest curvature this near
 
 
 def generate_track(seed: int, spec: TrackSpec | None = None) -> Track:
@@ -67,21 +72,26 @@ def generate_track(seed: int, spec: TrackSpec | None = None) -> Track:
         if layout is None:
             reasons["the features do not fit the lap length or turn"] += 1
             continue
-        try:
-            loop = loop_centreline(layout.segments, layout.line_at)
+        lo, hi = spec.lengths
+        clearance = layout.width + spec.leg_gap
+        try:  # coarsely first: most layouts fail here, at a tenth of the cost
+            segments, coarse, _, _ = resize_to_close(layout.segments, COARSE_STEP)
+            fits = lo <= len(coarse) * COARSE_STEP <= hi
+            apart = fits and legs_apart(coarse, COARSE_STEP, clearance)
+            loop = loop_centreline(segments, layout.line_at) if apart else None
         except LoopClosureError:
             reasons["the loop does not close"] += 1
             continue
-        lo, hi = spec.lengths
-        if not lo <= loop.length <= hi:
+        if not fits or (loop is not None and not lo <= loop.length <= hi):
             reasons[f"the lap is not {lo:g}-{hi:g} m long"] += 1
             continue
-        if not legs_apart(loop, layout.width + spec.leg_gap):
+        if loop is None or not legs_apart(loop.points, STEP, clearance):
             reasons["parts of the loop come too close"] += 1
             continue
         cones, kinds = loop_cones(
-            loop, layout.width, layout.gate_offset, spec.min_spacing, spec.max_spacing
-        )
+            loop, layout.width, gate_offset=layout.gate_offset, min_spacing=spec.min_spacing,
+            max_spacing=spec.max_spacing, spacing_window=SPACING_WINDOW_M,
+        )  # fmt: skip
         description = (
             f"generated (seed {seed}, {spec.size}): {loop.length:.0f} m, "
             f"{layout.width:.2f} m wide, gate {layout.gate_offset:.2f} m outside the lane; "
@@ -97,19 +107,20 @@ def generate_track(seed: int, spec: TrackSpec | None = None) -> Track:
     )
 
 
-def legs_apart(loop: LoopCentreline, distance: float) -> bool:
-    """Whether points of the centreline closer than ``distance`` [m] are one bend.
+def legs_apart(centreline: FloatArray, step: float, distance: float) -> bool:
+    """Whether points of a closed centreline (n, 2) [m], ``step`` [m] apart, that
+    are closer than ``distance`` [m] are one bend.
 
     Two points closer than ``distance`` must lie within a quarter of the
     circle of that diameter of each other along the loop (pi/2 * distance):
     so are points of one bend, and not of two legs side by side.
     """
-    every = max(1, round(CHECK_SPACING / STEP))
-    points = loop.points[::every]
+    every = max(1, round(CHECK_SPACING / step))
+    points = centreline[::every]
     pairs = cKDTree(points).query_pairs(distance, output_type="ndarray")
     if len(pairs) == 0:
         return True
     n = len(points)
     apart = np.abs(pairs[:, 0] - pairs[:, 1])
-    along = np.minimum(apart, n - apart) * (every * STEP)
+    along = np.minimum(apart, n - apart) * (every * step)
     return bool(np.all(along <= 0.5 * math.pi * distance))

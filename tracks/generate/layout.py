@@ -2,7 +2,8 @@
 
 One attempt (``random_layout``) draws, from its own random generator:
 
-1. the lap length (within the spec's range) and the lane's width;
+1. the lap length (within the spec's range, 10 % in from its ends) and
+   the lane's width;
 2. the hairpins: each turns 165-195 deg at a lane-centre radius within
    ``hairpin_radius``, or, for a ``tight_share`` of them, down to
    ``min_radius``; mostly the loop's way round, sometimes against it;
@@ -35,6 +36,7 @@ from conesim.tracks.generate.spec import (
     TrackSpec,
 )
 
+LENGTH_MARGIN = 0.1  # the lap is drawn from the length range less this share at either end
 START_STRAIGHT_M = (20.0, 40.0)  # [m] the start straight: gate, standing start, run-up
 MIN_STRAIGHT_M = 3.0  # [m] between two features
 FEATURE_SHARE = 0.45  # features (arcs) take about this share of the lap, straights the rest
@@ -46,7 +48,7 @@ FEATURE_WEIGHTS = {"s_bend": 0.35, "chicane": 0.25, "slalom": 0.1, "corner": 0.3
 
 
 @dataclass(frozen=True)
-class Layout:
+class LoopLayout:
     """One attempt's loop before it is closed.
 
     Attributes:
@@ -65,9 +67,11 @@ class Layout:
     features: list[str]
 
 
-def random_layout(rng: np.random.Generator, spec: TrackSpec) -> Layout | None:
+def random_layout(rng: np.random.Generator, spec: TrackSpec) -> LoopLayout | None:
     """One random layout (module docstring), or None when the draws cannot make one."""
-    target = float(rng.uniform(*spec.lengths))
+    lo, hi = spec.lengths
+    margin = LENGTH_MARGIN * (hi - lo)  # closing the loop changes the length a little
+    target = float(rng.uniform(lo + margin, hi - margin))
     width = float(rng.uniform(*spec.width))
     gate_offset = float(rng.uniform(*spec.gate_offset))
     features: list[tuple[str, list[Segment], float]] = []  # kind, arcs, net turn [deg]
@@ -109,7 +113,7 @@ def random_layout(rng: np.random.Generator, spec: TrackSpec) -> Layout | None:
         length = min(float(lengths[k]), FS_MAX_STRAIGHT_M - 10.0)
         segments.append(straight(length, True, MIN_STRAIGHT_M, FS_MAX_STRAIGHT_M - 5.0))
     line_at = 0.5 * start_length
-    return Layout(segments, width, gate_offset, line_at, names)
+    return LoopLayout(segments, width, gate_offset, line_at, names)
 
 
 def _hairpin(rng: np.random.Generator, spec: TrackSpec) -> tuple[str, list[Segment], float]:
@@ -131,15 +135,18 @@ def _feature(
     floor = max(spec.min_radius, spec.hairpin_radius[0])
     if kind == "s_bend":
         a1, a2 = rng.uniform(45.0, 100.0, 2)
-        r1, r2 = rng.uniform(max(floor, 6.0), 14.0, 2)
+        low = max(floor, 6.0)
+        r1, r2 = rng.uniform(low, max(low, 14.0), 2)
         return kind, [arc(float(r1), sign * a1), arc(float(r2), -sign * a2)], sign * (a1 - a2)
     if kind == "chicane":
         a = float(rng.uniform(25.0, 45.0))
-        r = float(rng.uniform(max(floor, 5.0), 9.0))
+        low = max(floor, 5.0)
+        r = float(rng.uniform(low, max(low, 9.0)))
         return kind, [arc(r, sign * a), arc(r, -2 * sign * a), arc(r, sign * a)], 0.0
     if kind == "slalom":
         length = float(rng.uniform(30.0, 45.0))
-        return kind, [slalom(length, float(rng.uniform(max(floor, 9.0), 13.0)), 2)], 0.0
+        low = max(floor, 9.0)
+        return kind, [slalom(length, float(rng.uniform(low, max(low, 13.0))), 2)], 0.0
     angle = float(rng.uniform(*CORNER_ANGLE_DEG))
     return "corner", [arc(_corner_radius(rng), sign * angle)], sign * angle
 
