@@ -219,12 +219,17 @@ def vector_scaling(steps: int = 1000) -> None:
     vec.close()
     two = 2 * steps / wall
     load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
+    worker, main = workers / (2 * steps), main_cpu / steps  # per env step, per vec step
+    # On two idle cores the workers step side by side, then the main process
+    # gathers their results while they wait: a vec step takes worker + main.
+    idle = 2.0 * one_cpu / (worker + main)
     print(
         f"  wall clock: 1 env {one:,.0f} steps/s; 2 async workers {two:,.0f} steps/s:"
         f" {two / one:.2f}x (load average {load} on {os.cpu_count()} cores)"
-        f"\n  CPU per env step: 1 env {1e6 * one_cpu:.0f} us; 2 async workers"
-        f" {1e6 * workers / (2 * steps):.0f} us in the workers"
-        f" + {1e6 * main_cpu / (2 * steps):.0f} us in the main process"
+        f"\n  CPU: 1 env {1e6 * one_cpu:.0f} us per step; 2 async workers"
+        f" {1e6 * worker:.0f} us per env step each, the main process {1e6 * main:.0f} us"
+        f" per vec step: on 2 idle cores 2 x {1e6 * one_cpu:.0f} /"
+        f" ({1e6 * worker:.0f} + {1e6 * main:.0f}) = {idle:.2f}x"
     )
 
 
