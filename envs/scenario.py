@@ -211,14 +211,20 @@ class Scenario:
             autopilot=self.autopilot_config(),
         )
 
-    def closed_loop(self, track: Track, driver: DriverFactory | None = None) -> ClosedLoop:
-        """The closed loop of this scenario on ``track`` (loaded from ``self.track``)."""
+    def closed_loop(
+        self,
+        track: Track,
+        driver: DriverFactory | None = None,
+        rules: EpisodeRules | None = None,
+    ) -> ClosedLoop:
+        """The closed loop of this scenario on ``track`` (loaded from ``self.track``);
+        ``rules`` replace the scenario's (the env's stuck rule and its grace)."""
         return ClosedLoop(
             track,
             self.world_config(),
             localization=self.localization,
             control_rate=self.control_rate,
-            rules=self.rules,
+            rules=rules or self.rules,
             driver=driver,
             ekf=self.ekf_config(),
         )
