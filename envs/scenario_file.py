@@ -233,13 +233,8 @@ def track_from_data(value: Any, path: Path = ("track",)) -> str | GeneratedTrack
     """
     if isinstance(value, GeneratedTrack):
         return value
-    if isinstance(value, str):
-        return convert(value, str, path)
     if not isinstance(value, Mapping):
-        raise FieldError(
-            path, f"expected a track name, a file or {{{GENERATE_KEY}: {{seed: S, ...}}}}, "
-            f"got {value!r}",
-        )  # fmt: skip
+        return convert(value, str, path)  # text, or "expected text, got ..."
     for key in value:
         if key != GENERATE_KEY:
             raise FieldError((*path, key), f"unknown key {key!r}; allowed keys: {GENERATE_KEY}")
