@@ -47,7 +47,9 @@ localization="fused", laps=1, control_rate=50, observation="vector",
 render_mode="rgb_array", ...)``; every ``envs.config.EnvConfig`` field, or
 ``scenario=`` (a ``Scenario`` or a scenario file) with the keywords given
 beside it changing its parts; ``sensors`` may be a ``SensorProfile``, and
-``faults``, ``ekf`` and ``vehicle`` objects or mappings. Unknown keys raise,
+``faults``, ``ekf`` and ``vehicle`` objects or mappings; ``track`` may be a
+generated track (a ``GeneratedTrack``, or ``{"generate": {"seed": S, ...}}``
+as in a scenario file). Unknown keys raise,
 listing the allowed ones. ``reset(options=...)`` takes ``track``,
 ``sensors`` (a name or a profile), ``localization`` and ``start_pose``
 ((x, y, yaw) of the CG) for that episode only.
