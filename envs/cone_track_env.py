@@ -98,10 +98,12 @@ stuck_grace=15, terminate_off_track=True, time_limit=None,
 render_mode="rgb_array", ...)``; every ``envs.config.EnvConfig`` field, or
 ``scenario=`` (a ``Scenario`` or a scenario file) with the keywords given
 beside it changing its parts; ``sensors`` may be a ``SensorProfile``, and
-``faults``, ``ekf`` and ``vehicle`` objects or mappings. Unknown keys and
-values out of range raise, naming them. ``reset(options=...)`` takes
-``track``, ``sensors`` (a name or a profile), ``localization`` and
-``start_pose`` ((x, y, yaw) of the CG) for that episode only.
+``faults``, ``ekf`` and ``vehicle`` objects or mappings; ``track`` may be a
+generated track (a ``GeneratedTrack``, or ``{"generate": {"seed": S, ...}}``
+as in a scenario file). Unknown keys and values out of range raise, naming
+them. ``reset(options=...)`` takes ``track``, ``sensors`` (a name or a
+profile), ``localization`` and ``start_pose`` ((x, y, yaw) of the CG) for
+that episode only.
 
 ## Version History
 * v0: first release (conesim 0.1.0, unreleased: its dict observation grew
