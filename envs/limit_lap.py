@@ -8,18 +8,21 @@ between. Hand-written because no maintained Python package does a QSS lap for
 a given path and car (the open lap-time simulators are MATLAB, or full
 optimal-control stacks); it is three array passes.
 
-For the ``VehicleParams`` car (the same limits the simulated car has):
+For the ``VehicleParams`` car, with the limits the simulated car has
+(``envs.traction.AxleLimits``: each axle's friction ellipse on its load,
+with the load transfer, the drive and brake splits and the downforce of
+``sim.vehicle_dynamics``):
 
-* grip: ``a_max(v) = mu * D * (g + 0.5 rho ClA v^2 / m)`` (the Pacejka peak on
-  the static plus aerodynamic load);
-* cornering speed: ``v^2 |kappa| = a_max(v)``, so
-  ``v_corner = sqrt(mu D g / (|kappa| - mu D 0.5 rho ClA / m))`` (unbounded when the
-  downforce grows faster than the curvature needs: capped at the top speed);
-* forward pass: ``dv^2/ds = 2 a_x`` with ``a_x = min(max_accel, (min(F_max, P / v) -
-  F_drag - F_roll) / m)`` (rolling resistance on the static plus aerodynamic
-  load, as ``sim.vehicle_dynamics`` has it) inside the friction ellipse
-  ``a_x <= a_max sqrt(1 - (v^2 kappa / a_max)^2)``;
-* backward pass: the same with ``max_decel``.
+* cornering speed: the largest speed at which both axles hold the turn,
+  ``v^2 |kappa| = mu D (g + 0.5 rho ClA v^2 / m)`` for the defaults (the
+  Pacejka peak on the static plus aerodynamic load; capped at the top speed
+  where the downforce grows faster than the curvature needs);
+* forward pass: ``dv^2/ds = 2 a_x`` with a_x the largest acceleration the
+  demand limit (``max_accel``), the motor (``min(F_max, P / v)`` less drag
+  and rolling resistance on the static plus aerodynamic load) and both
+  axles' ellipses allow beside the corner's lateral force;
+* backward pass: the same with ``max_decel`` and the brake split: braking
+  into a corner, the unloaded rear axle runs out of grip first.
 
 A loop is a flying lap (the passes start at its slowest corner, so the
 speed at the line is periodic); the simulated car's first lap includes a standing start, so
@@ -45,6 +48,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.ndimage import uniform_filter1d
 
 from conesim.core.polyline import Polyline
 from conesim.envs.racing_line import (
@@ -54,6 +58,7 @@ from conesim.envs.racing_line import (
     racing_lines,
     spline_grid,
 )
+from conesim.envs.traction import AxleLimits
 from conesim.sim.progress import PolylineProgress
 from conesim.sim.race_control import line_crossings_along
 from conesim.sim.vehicle_params import VehicleParams
@@ -61,6 +66,7 @@ from conesim.tracks import Layout, Track
 
 FloatArray = NDArray[np.float64]
 STEP_M = 0.25  # [m] resampling step of the centreline
+CURVATURE_WINDOW_M = 2.0  # [m] the curvature is averaged over this much of the line
 BLENDS = (0.0, 0.25, 0.5, 0.75, 1.0)  # shares of the shortest path in the lines timed,
 BLEND_REFINE = 0.125  # then these either side of the fastest
 
@@ -74,52 +80,38 @@ def centreline_grid(points: FloatArray, closed: bool) -> tuple[FloatArray, Float
     loop) goes through the given points, which lie on the curve; it is
     sampled every ``STEP_M`` of its arc length, and the curvature at each
     sample is the polyline's through the samples (``Polyline.curvature``,
-    the circle through a sample and its neighbours).
+    the circle through a sample and its neighbours), averaged over
+    ``CURVATURE_WINDOW_M`` (a car a wheelbase long does not feel a ripple
+    shorter than itself; TUM's lap-time tools, too, take the curvature over a
+    preview and a review of the path). The average keeps a circle's 1/R.
 
     Returns:
         (s (k,) [m], kappa (k,) [1/m]).
     """
     s, samples = spline_grid(points, closed, STEP_M)
-    return s, Polyline(samples, closed).curvature()
+    kappa = Polyline(samples, closed).curvature()
+    window = max(1, round(CURVATURE_WINDOW_M / STEP_M))
+    return s, uniform_filter1d(kappa, window, mode="wrap" if closed else "nearest")
 
 
 def qss_speed_profile(
     s: FloatArray, kappa: FloatArray, closed: bool, p: VehicleParams, v_start: float = 0.0
 ) -> FloatArray:
     """Quasi-steady-state speed at each station [m/s] (see the module docstring)."""
-    mu_peak = p.mu * p.tyre_front.D
-    k_aero = 0.5 * p.air_density * p.lift_area / p.mass
-    k_drag = 0.5 * p.air_density * p.drag_area / p.mass
-    v_top = _top_speed(p)
-    denom = np.abs(kappa) - mu_peak * k_aero
-    with np.errstate(divide="ignore"):
-        v_corner = np.where(
-            denom > 0, np.sqrt(mu_peak * p.gravity / np.maximum(denom, 1e-12)), v_top
-        )
-    v_lim = np.minimum(v_corner, v_top)
+    axles = AxleLimits(p)
+    v_lim = axles.corner_speed(kappa, _top_speed(p))
     n = len(s)
     ds = (np.diff(s) if not closed else np.full(n, s[1] - s[0])).tolist()
     k_abs = np.abs(kappa).tolist()
-    g, crr, m = p.gravity, p.rolling_resistance, p.mass
-    f_max, power, a_drive, a_brake = p.max_drive_force, p.max_power, p.max_accel, p.max_decel
-    sqrt = math.sqrt
-
-    def a_available(v: float, k: float) -> float:
-        """What the friction ellipse leaves for the longitudinal direction [m/s^2]."""
-        a_max = mu_peak * (g + k_aero * v * v)
-        lat = min(1.0, v * v * k / a_max)
-        return a_max * sqrt(max(0.0, 1.0 - lat * lat))
+    drive, brake, sqrt = axles.drive, axles.brake, math.sqrt
 
     def forward(out: list[float], laps: int) -> None:
         for _ in range(laps):
             for i in range(n - 1 if not closed else n):
                 j = i + 1 if i + 1 < n else 0
                 vi = out[i]
-                v2 = vi * vi
-                f_drive = min(f_max, power / max(vi, 0.1)) / m
-                resist = k_drag * v2 + crr * (g + k_aero * v2)  # drag, rolling on the loads
-                a = min(a_drive, f_drive - resist, a_available(vi, k_abs[i]))
-                out[j] = min(out[j], sqrt(v2 + 2.0 * max(a, 0.0) * ds[i]))
+                a = drive(vi, k_abs[i])
+                out[j] = min(out[j], sqrt(vi * vi + 2.0 * max(a, 0.0) * ds[i]))
 
     def backward(out: list[float], laps: int) -> None:
         for _ in range(laps):
@@ -127,7 +119,7 @@ def qss_speed_profile(
                 j = i % n
                 k = i - 1
                 vj = out[j]
-                a = min(a_brake, a_available(vj, k_abs[k]))  # braking on segment k -> j
+                a = brake(vj, k_abs[k])  # braking on segment k -> j
                 out[k] = min(out[k], sqrt(vj * vj + 2.0 * a * ds[k]))
 
     if not closed:

@@ -209,11 +209,12 @@ def offset_bounds(
     negative distance to it; where the bounds cross, both are the middle of
     the two.
     """
-    tangents = Polyline(reference, True).tangents()
+    ring = Polyline(reference, True)
+    tangents = ring.tangents()
     normals = np.column_stack([-tangents[:, 1], tangents[:, 0]])
     d_left = -corridor.left.project(reference).lateral
     d_right = corridor.right.project(reference).lateral
-    step = float(np.mean(Polyline(reference, True).segment_lengths))
+    step = float(np.mean(ring.segment_lengths))
     window = max(1, 2 * round(0.5 * SMOOTHING_M / step) + 1)  # odd, about SMOOTHING_M
     upper = _smooth_below(d_left - corridor.clearance, window)
     lower = -_smooth_below(d_right - corridor.clearance, window)
