@@ -41,7 +41,10 @@ the same step, its bounds measured again) and the QP is solved again:
 ``ITERATIONS`` times in all, as Heilmeier et al. iterate theirs.
 
 **Shortest path** on the last reference, ``min sum |P_{i+1} - P_i|^2``,
-exactly quadratic in alpha (TUM's ``opt_shortest_path``).
+exactly quadratic in alpha (TUM's ``opt_shortest_path``), plus a little of
+the curvature's objective (``SHORTEST_SMOOTHING``): pressed on the bounds
+for whole corners, the plain shortest path follows the polygon of the
+cones, whose kinks a QSS lap reads as slow corners.
 
 **Why both**: the minimum-curvature line is not the fastest one where the
 corners are long: on a ring of constant width it is the outermost circle,
@@ -78,6 +81,11 @@ TIGHTENING_ROUNDS = 3  # at most, to keep the splines between the QP's points in
 CHECK_STEP_M = 0.1  # [m] the splines are checked this often
 BOUNDARY_STEP_M = 0.02  # [m] the boundaries' points the check measures to
 TOLERANCE_M = 0.002  # [m] the clearance the splines may lack
+# [m^4] weight of the squared curvatures in the shortest path's objective: a
+# ripple of wavelength l costs (2 pi / l)^2 this much more in curvature than in
+# length, so ripples shorter than the cone spacing are smoothed away while a
+# corner's shape (tens of metres) is still the shortest path's.
+SHORTEST_SMOOTHING = 4.0
 SMOOTHING_M = 5.0  # [m] the bounds are smoothed over this much (FS cones are <= 5 m apart)
 _REGULARISATION = 1e-9  # [1/m^4] added to the QP's diagonal: a unique solution on straights
 
@@ -239,21 +247,29 @@ def min_curvature_offsets(
     reference: FloatArray, lower: FloatArray, upper: FloatArray
 ) -> FloatArray:
     """Offsets (n,) [m] of the minimum-curvature line, linearised about ``reference``."""
+    m, kappa = _curvature_model(reference)
+    return _box_qp(2.0 * (m.T @ m), 2.0 * (m.T @ kappa), lower, upper)
+
+
+def _curvature_model(reference: FloatArray) -> tuple[sparse.csc_matrix, FloatArray]:
+    """(M (n, n), c (n,)): the curvature of the offset line is c + M alpha (module
+    docstring), c = kappa_r, M = D2 / h^2 + diag(kappa_r^2)."""
     line = Polyline(reference, True)
     h2 = float(np.mean(line.segment_lengths)) ** 2
     kappa = line.curvature()
     d2 = _periodic_difference(len(reference), (1.0, -2.0, 1.0))
-    m = (d2 / h2 + sparse.diags(kappa**2)).tocsc()
-    return _box_qp(2.0 * (m.T @ m), 2.0 * (m.T @ kappa), lower, upper)
+    return (d2 / h2 + sparse.diags(kappa**2)).tocsc(), kappa
 
 
 def shortest_path_offsets(
     reference: FloatArray, normals: FloatArray, lower: FloatArray, upper: FloatArray
 ) -> FloatArray:
-    """Offsets (n,) [m] of the line of least sum of squared step lengths."""
+    """Offsets (n,) [m] of the line of least sum of squared step lengths, plus
+    ``SHORTEST_SMOOTHING`` times its sum of squared curvatures."""
     d1 = _periodic_difference(len(reference), (-1.0, 1.0))
-    hess = sparse.csc_matrix((len(reference), len(reference)))
-    grad = np.zeros(len(reference))
+    m, kappa = _curvature_model(reference)
+    hess = SHORTEST_SMOOTHING * 2.0 * (m.T @ m)
+    grad = SHORTEST_SMOOTHING * 2.0 * (m.T @ kappa)
     for axis in range(2):
         b = d1 @ sparse.diags(normals[:, axis])
         hess = hess + 2.0 * (b.T @ b)
@@ -286,11 +302,17 @@ def _box_qp(
     solver = osqp.OSQP()
     solver.setup(
         hess, np.asarray(gradient, dtype=float), sparse.identity(n, format="csc"),
-        lower, upper, verbose=False, eps_abs=1e-7, eps_rel=1e-7, max_iter=20_000,
+        lower, upper, verbose=False, eps_abs=1e-6, eps_rel=1e-6, max_iter=50_000,
         polishing=True,
     )  # fmt: skip
     result = solver.solve(raise_error=False)
-    solved = (osqp.SolverStatus.OSQP_SOLVED, osqp.SolverStatus.OSQP_SOLVED_INACCURATE)
+    # A solution at the iteration limit is clipped into the box like any other:
+    # an admissible line, if not quite the optimal one.
+    solved = (
+        osqp.SolverStatus.OSQP_SOLVED,
+        osqp.SolverStatus.OSQP_SOLVED_INACCURATE,
+        osqp.SolverStatus.OSQP_MAX_ITER_REACHED,
+    )
     if result.info.status_val not in solved or not np.all(np.isfinite(result.x)):
         raise RacingLineError(f"the racing line's QP failed: {result.info.status}")
     return np.clip(np.asarray(result.x, dtype=float), lower, upper)

@@ -47,6 +47,9 @@ from numpy.typing import NDArray
 from conesim.sim.vehicle_params import VehicleParams
 
 FloatArray = NDArray[np.float64]
+# (static load [N], downforce per v^2 [N s^2/m^2], lateral force per ay [kg], peak
+# friction [-], share of the longitudinal force [-], load transfer sign [-])
+_Axle = tuple[float, float, float, float, float, float]
 
 
 class AxleLimits:
@@ -76,6 +79,11 @@ class AxleLimits:
         )
         self.k_drag = 0.5 * p.air_density * p.drag_area
         self.down = down
+        # with (share of the longitudinal force, sign of the load transfer per demand)
+        f, r = self.front, self.rear
+        drive, brake = p.drive_front_share, p.brake_front_share
+        self._drive = ((*f, drive, -1.0), (*r, 1.0 - drive, 1.0))
+        self._brake = ((*f, brake, 1.0), (*r, 1.0 - brake, -1.0))
 
     def corner_speed(self, kappa: FloatArray, v_top: float) -> FloatArray:
         """The largest steady speed (n,) [m/s] on curvatures ``kappa`` (n,) [1/m], at
@@ -105,58 +113,40 @@ class AxleLimits:
         limit = min(p.max_accel, motor)
         if limit <= 0.0:
             return limit
-        ay = v * v * abs(kappa)
-        share = p.drive_front_share
-        common = {"rho": resist, "v": v, "ay": ay, "u": self.u, "m": p.mass}
-        limit = _axle_limit(self.front, share=share, sigma=-1.0, x_max=limit, **common)
-        return _axle_limit(self.rear, share=1.0 - share, sigma=1.0, x_max=limit, **common)
+        return self._axles(self._drive, resist, v, abs(kappa), limit)
 
     def brake(self, v: float, kappa: float) -> float:
         """The largest deceleration [m/s^2] (positive) at speed ``v`` on ``kappa``."""
-        p = self.p
-        resist = self.resistance(v)
-        ay = v * v * abs(kappa)
-        share = p.brake_front_share
-        common = {"rho": -resist, "v": v, "ay": ay, "u": self.u, "m": p.mass}
-        limit = _axle_limit(self.front, share=share, sigma=1.0, x_max=p.max_decel, **common)
-        return _axle_limit(self.rear, share=1.0 - share, sigma=-1.0, x_max=limit, **common)
+        return self._axles(self._brake, -self.resistance(v), v, abs(kappa), self.p.max_decel)
 
-
-def _axle_limit(
-    axle: tuple[float, float, float, float],
-    *,
-    share: float,
-    sigma: float,
-    rho: float,
-    v: float,
-    ay: float,
-    x_max: float,
-    u: float,
-    m: float,
-) -> float:
-    """The largest demand x in [0, x_max] inside one axle's ellipse (module docstring):
-    ``x_max`` where it fits, else the largest root of the quadratic below it, else 0."""
-    z0, down, lat, mu = axle
-    z = z0 + down * v * v
-    fy = lat * ay
-
-    def excess(x: float) -> float:
-        fx = share * (m * x + rho)
-        fz = max(z + sigma * u * x, 0.0)
-        return fx * fx + fy * fy - (mu * fz) ** 2
-
-    if excess(x_max) <= 0.0:
+    def _axles(
+        self, axles: tuple[_Axle, _Axle], rho: float, v: float, kappa: float, x_max: float
+    ) -> float:
+        """The largest demand x in [0, x_max] inside both axles' ellipses (module
+        docstring): per axle, ``x_max`` where it fits, else the largest root of the
+        quadratic below it, else 0."""
+        m, u, v2 = self.p.mass, self.u, v * v
+        ay = v2 * kappa
+        for z0, down, lat, mu, share, sigma in axles:
+            z = z0 + down * v2
+            fy = lat * ay
+            fx = share * (m * x_max + rho)
+            fz = max(z + sigma * u * x_max, 0.0)
+            if fx * fx + fy * fy <= mu * mu * fz * fz:
+                continue
+            a = share * share * m * m - mu * mu * u * u
+            b = 2.0 * share * share * m * rho - 2.0 * mu * mu * sigma * z * u
+            c = share * share * rho * rho + fy * fy - mu * mu * z * z
+            if abs(a) < 1e-12:
+                roots = [-c / b] if abs(b) > 1e-12 else []
+            else:
+                disc = b * b - 4.0 * a * c
+                if disc < 0.0:
+                    return 0.0
+                sq = math.sqrt(disc)
+                roots = [(-b - sq) / (2.0 * a), (-b + sq) / (2.0 * a)]
+            below = [r for r in roots if 0.0 <= r < x_max]
+            if not below:
+                return 0.0
+            x_max = max(below)
         return x_max
-    a = share * share * m * m - mu * mu * u * u
-    b = 2.0 * share * share * m * rho - 2.0 * mu * mu * sigma * z * u
-    c = share * share * rho * rho + fy * fy - mu * mu * z * z
-    if abs(a) < 1e-12:
-        roots = [-c / b] if abs(b) > 1e-12 else []
-    else:
-        disc = b * b - 4.0 * a * c
-        if disc < 0.0:
-            return 0.0
-        sq = math.sqrt(disc)
-        roots = [(-b - sq) / (2.0 * a), (-b + sq) / (2.0 * a)]
-    below = [r for r in roots if 0.0 <= r < x_max]
-    return max(below) if below else 0.0
