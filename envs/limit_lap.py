@@ -33,11 +33,13 @@ simulated run is.
 **The limit of a track** (``track_lap_limit``): a loop's, and the skidpad's
 timed circle's, is the fastest of the lines ``envs.racing_line`` offers, the
 blends ``BLENDS`` of its minimum-curvature line with its shortest path (and
-``BLEND_REFINE`` either side of the fastest of them), all
-inside the cones less half the car's width and ``racing_line.MARGIN_M``,
-each timed by the QSS above. An open lane's racing line is its centreline
-(the acceleration lane is straight). The centreline's figure is kept beside
-it. Both are computed once per track and car (``track_lap_limit``).
+``BLEND_REFINE`` either side of the fastest of them), all inside the cones
+less half the car's width and ``racing_line.MARGIN_M``, each timed by the
+QSS above; never slower than the centreline (where no line beats it, or
+none can be found, the limit is the centreline's, with a warning in the
+latter case). An open lane's racing line is its centreline (the
+acceleration lane is straight), timed from rest. The centreline's figure is
+kept beside the limit. Both are computed once per track and car.
 """
 
 from __future__ import annotations
@@ -51,13 +53,7 @@ from numpy.typing import NDArray
 from scipy.ndimage import uniform_filter1d
 
 from conesim.core.polyline import Polyline
-from conesim.envs.racing_line import (
-    MARGIN_M,
-    Corridor,
-    RacingLineError,
-    racing_lines,
-    spline_grid,
-)
+from conesim.envs.racing_line import MARGIN_M, Corridor, racing_lines, spline_grid
 from conesim.envs.traction import AxleLimits
 from conesim.sim.progress import PolylineProgress
 from conesim.sim.race_control import line_crossings_along
@@ -226,35 +222,39 @@ _LIMITS: dict[tuple[object, ...], LapLimit] = {}
 
 def _compute_limit(track: Track, p: VehicleParams) -> LapLimit:
     centre = np.asarray(track.centreline)
-    if track.layout == Layout.OPEN:
-        return LapLimit(limit_s=_open_lane_time(track, p), centreline_s=_open_lane_time(track, p))
+    clearance = 0.5 * p.width + MARGIN_M
     if track.layout == Layout.CLOSED:
         corridor = Corridor(
             centre,
             Polyline(track.left_boundary, True),
             Polyline(track.right_boundary, True),
-            clearance=0.5 * p.width + MARGIN_M,
+            clearance,
         )
     else:
-        mask = _skidpad_circle(track)
+        mask = _skidpad_circle(track) if track.layout == Layout.SKIDPAD else None
+        if mask is None:  # an open lane, or a skidpad whose circle cannot be found
+            lane = _open_lane_time(track, p)
+            return LapLimit(limit_s=lane, centreline_s=lane)
         corridor = Corridor(
             centre[mask],
             Polyline(np.asarray(track.left_boundary)[mask], True),
             Polyline(np.asarray(track.right_boundary)[mask], True),
-            clearance=0.5 * p.width + MARGIN_M,
+            clearance,
         )
     centreline_s = limit_lap_time(corridor.centre, True, p)
     try:
         lines = racing_lines(corridor)
-    except RacingLineError as exc:
+        times = {blend: limit_lap_time(lines.line(blend), True, p) for blend in BLENDS}
+        coarse = min(times, key=times.__getitem__)
+        for blend in (coarse - BLEND_REFINE, coarse + BLEND_REFINE):
+            if 0.0 < blend < 1.0:
+                times[blend] = limit_lap_time(lines.line(blend), True, p)
+    except (ValueError, ArithmeticError) as exc:  # RacingLineError, or a line too odd
         _LOG.warning("%s: no racing line (%s); the limit is the centreline's", track.name, exc)
         return LapLimit(limit_s=centreline_s, centreline_s=centreline_s)
-    times = {blend: limit_lap_time(lines.line(blend), True, p) for blend in BLENDS}
-    coarse = min(times, key=times.__getitem__)
-    for blend in (coarse - BLEND_REFINE, coarse + BLEND_REFINE):
-        if 0.0 < blend < 1.0:
-            times[blend] = limit_lap_time(lines.line(blend), True, p)
     best = min(times, key=times.__getitem__)
+    if times[best] > centreline_s:  # no line inside the margins beats the centreline
+        return LapLimit(limit_s=centreline_s, centreline_s=centreline_s)
     return LapLimit(
         limit_s=times[best],
         centreline_s=centreline_s,
@@ -263,14 +263,14 @@ def _compute_limit(track: Track, p: VehicleParams) -> LapLimit:
     )
 
 
-def _skidpad_circle(track: Track) -> NDArray[np.bool_]:
+def _skidpad_circle(track: Track) -> NDArray[np.bool_] | None:
     """The centreline points of the skidpad's timed circle: between the first two
-    crossings of the timing line (the whole centreline if it crosses less)."""
+    crossings of the timing line (None if it crosses it less often)."""
     centre = np.asarray(track.centreline)
     s = Polyline(centre).stations
     finishes = line_crossings_along(centre, False, np.asarray(track.finish_line))
     if len(finishes) < 2:
-        return np.ones(len(centre), dtype=bool)
+        return None
     return (s >= finishes[0]) & (s < finishes[1])
 
 

@@ -5,10 +5,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from numpy.testing import assert_allclose
 
 from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
+from conesim.envs import limit_lap
 from conesim.envs.limit_lap import (
     _top_speed,
     centreline_grid,
@@ -16,7 +18,7 @@ from conesim.envs.limit_lap import (
     qss_speed_profile,
     track_lap_limit,
 )
-from conesim.envs.racing_line import MARGIN_M
+from conesim.envs.racing_line import MARGIN_M, RacingLineError
 from conesim.sim.vehicle_params import VehicleParams
 from conesim.tracks import ConeKind, Layout, Track, load_track
 
@@ -208,3 +210,17 @@ def test_open_lane_has_no_racing_line() -> None:
     lane = Track("lane", cones, kinds, Pose2D(0.0, 0.0, 0.0), Layout.OPEN)
     limit = track_lap_limit(lane)
     assert limit.racing_line is None and limit.limit_s == limit.centreline_s
+
+
+def test_a_failed_qp_falls_back_to_the_centreline(
+    monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Where no racing line can be found the limit is the centreline's, with a warning."""
+
+    def fail(corridor: object) -> None:
+        raise RacingLineError("the racing line's QP failed: primal infeasible")
+
+    monkeypatch.setattr(limit_lap, "racing_lines", fail)
+    limit = track_lap_limit(ring_track(15.0, 3.0), VehicleParams(mass=191.0))  # not cached
+    assert limit.racing_line is None and limit.limit_s == limit.centreline_s
+    assert "no racing line" in caplog.text
