@@ -46,6 +46,13 @@ the curvature's objective (``SHORTEST_SMOOTHING``): pressed on the bounds
 for whole corners, the plain shortest path follows the polygon of the
 cones, whose kinks a QSS lap reads as slow corners.
 
+**Between the points** the spline through them (the line the QSS lap
+times) can pass closer to a cone than the points themselves, on the inside
+of a corner: ``clearance_lacking`` measures both lines every
+``CHECK_STEP_M``, the bounds of the points about a shortfall are tightened
+by it and both QPs solved again, up to ``TIGHTENING_ROUNDS`` times, until
+no shortfall exceeds ``TOLERANCE_M``.
+
 **Why both**: the minimum-curvature line is not the fastest one where the
 corners are long: on a ring of constant width it is the outermost circle,
 whose lap time 2 pi sqrt(r / a_lat) grows with its radius r, so the
