@@ -21,8 +21,10 @@ so generated tracks can be checked the same way):
    beat the limit by more than 1 %.
 
 Run: ``.venv/bin/python benchmarks/bench_limit.py [--tracks a,b,FILE]
-[--speed-factor 1.0,0.95] [--autopilot] [--seeds N] [--laps N]``. Exit
-status 1 when a lap beats the limit by more than 1 %.
+[--hand-made DIR] [--speed-factor 0.9,1.0] [--autopilot] [--seeds N]
+[--laps N]`` (``--hand-made``: also ``limit_tracks.py``'s rings, hairpins
+and S-bend, written to DIR). Exit status 1 when a lap beats the limit by
+more than 1 %.
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from limit_tracks import write_hand_made
 
 from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
@@ -203,10 +206,15 @@ def main() -> int:
     parser.add_argument("--autopilot", action="store_true", help="also run the autopilot")
     parser.add_argument("--seeds", type=int, default=1, help="autopilot seeds per track")
     parser.add_argument("--laps", type=int, default=2, help="autopilot laps")
+    parser.add_argument(
+        "--hand-made", metavar="DIR", help="also write limit_tracks' loops to DIR and run them"
+    )
     args = parser.parse_args()
     try:
         factors = [float(f) for f in args.speed_factor.split(",") if f.strip()]
         names = [t.strip() for t in args.tracks.split(",") if t.strip()]
+        if args.hand_made:
+            names += [str(path) for path in write_hand_made(Path(args.hand_made))]
         tracks = [load_track(name) for name in names]
     except (ValueError, OSError) as exc:
         print(f"bench_limit: error: {exc}", file=sys.stderr)
