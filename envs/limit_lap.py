@@ -4,8 +4,9 @@ A quasi-steady-state (QSS) lap simulation, the standard first estimate of a
 car's lap time in vehicle dynamics (e.g. Milliken & Milliken, "Race Car
 Vehicle Dynamics", ch. 2): the car follows a line (the racing line, or the
 centreline for the figure beside it), at every point as fast as the tyres
-allow, accelerating and braking at the car's limits in between. Hand-written because no maintained Python package does a QSS lap for
-a given path and car (the open lap-time simulators are MATLAB, or full
+allow, accelerating and braking at the car's limits in between.
+Hand-written because no maintained Python package does a QSS lap for a
+given path and car (the open lap-time simulators are MATLAB, or full
 optimal-control stacks); it is three array passes.
 
 For the ``VehicleParams`` car, with the limits the simulated car has
