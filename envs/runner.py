@@ -56,7 +56,9 @@ the same seed gives the same result apart from them."""
 @dataclass
 class RunResult:
     """What a run reports (``result.json``); ``scenario`` is the resolved scenario
-    (``envs.scenario_file.scenario_to_mapping``), from which the run can be made again."""
+    (``envs.scenario_file.scenario_to_mapping``), from which the run can be made again.
+    ``trace`` and ``racing_line`` ((k, 2) [m], the line of ``limit_lap_time_s``, None on
+    an open lane; ``envs.limit_lap.LapLimit``) are for ``run.png``, not in the JSON."""
 
     track: str
     seed: int
