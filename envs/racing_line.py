@@ -299,7 +299,7 @@ def _box_qp(
     """``argmin 0.5 x' H x + g' x`` subject to ``lower <= x <= upper``, with OSQP.
 
     The solution is clipped into the box (OSQP meets its constraints to its
-    tolerance, about 1e-6 m here).
+    tolerance, about 1e-5 m here).
 
     Raises:
         RacingLineError: OSQP did not solve it.
@@ -309,7 +309,7 @@ def _box_qp(
     solver = osqp.OSQP()
     solver.setup(
         hess, np.asarray(gradient, dtype=float), sparse.identity(n, format="csc"),
-        lower, upper, verbose=False, eps_abs=1e-6, eps_rel=1e-6, max_iter=50_000,
+        lower, upper, verbose=False, eps_abs=1e-5, eps_rel=1e-5, max_iter=50_000,
         polishing=True,
     )  # fmt: skip
     result = solver.solve(raise_error=False)
