@@ -28,6 +28,8 @@ from typing import Any
 import numpy as np
 import pymunk
 from numpy.typing import NDArray
+from scipy.sparse import coo_array
+from scipy.sparse.csgraph import connected_components
 
 from conesim.sim.vehicle import VEHICLE_COLLISION_TYPE
 
@@ -158,10 +160,47 @@ class ConeField:
         space.on_collision(COLLISION_CONE, COLLISION_CONE, begin=self._on_cone_contact)
 
     def sleep_all(self) -> None:
-        """Put every resting cone to sleep (call once after adding the car)."""
-        for body in self.bodies:
-            if not body.is_sleeping:
-                body.sleep()
+        """Put every resting cone to sleep (call once after adding the car).
+
+        Chipmunk wants bodies that touch asleep together: a cone slept on its
+        own while it touches the car, or another cone, corrupts the contact
+        memory when it wakes (a crash inside ``Space.step``). So cones whose
+        bases touch sleep as one group (``Body.sleep_with_group``), and a
+        group that touches the car (a start pose on a cone) stays awake; it
+        falls asleep with its neighbours once idle, as Chipmunk groups it.
+        """
+        for group, touches_car in self.touching_groups():
+            if touches_car:
+                continue
+            first = self.bodies[group[0]]
+            if not first.is_sleeping:
+                first.sleep()
+            for i in group[1:]:
+                if not self.bodies[i].is_sleeping:
+                    self.bodies[i].sleep_with_group(first)
+
+    def touching_groups(self) -> list[tuple[list[int], bool]]:
+        """The cones in groups that touch now (chained), each with whether it
+        touches anything else in the space (the car)."""
+        n = len(self.bodies)
+        rows: list[int] = []
+        cols: list[int] = []
+        other = np.zeros(n, dtype=bool)
+        for i, body in enumerate(self.bodies):
+            for shape in body.shapes:
+                for hit in self._space.shape_query(shape):
+                    j = getattr(hit.shape, "cone_id", None)
+                    if j is None:
+                        other[i] = True
+                    else:
+                        rows.append(i)
+                        cols.append(j)
+        graph = coo_array((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+        _, label = connected_components(graph, directed=False)
+        groups: dict[int, list[int]] = {}
+        for i, g in enumerate(label.tolist()):
+            groups.setdefault(g, []).append(i)
+        return [(members, bool(other[members].any())) for members in groups.values()]
 
     def _on_car_contact(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: Any) -> None:
         for shape in arbiter.shapes:

@@ -131,3 +131,38 @@ def test_out_means_the_whole_base_left_its_square() -> None:
     field._watch.update({0, 1})
     field.update(0.0)
     assert field.doo_ids == {1}
+
+
+def test_touching_cones_are_grouped_and_the_car_is_named() -> None:
+    """Cones whose bases overlap chain into one group; a group under the car says so."""
+    space = make_space()
+    xy = np.array([[0.0, 0.0], [0.2, 0.1], [0.4, 0.0], [5.0, 0.0], [10.0, 0.0]])
+    field = ConeField(space, xy, ("blue",) * 5)
+    ram(space, (10.5, 0.0), 0.0)  # its 1.5 m box covers cone 4
+    groups = sorted(field.touching_groups())
+    assert groups == [([0, 1, 2], False), ([3], False), ([4], True)]
+
+
+def test_a_start_on_a_cone_steps_without_corrupting_pymunk() -> None:
+    """A car that starts over a cone (a start pose on the lane's edge) pushes it away.
+
+    A cone slept on its own while it touched the car crashed inside
+    ``Space.step`` ("free(): invalid pointer") on the first contact: it
+    stays awake now, and touching cones sleep as a group.
+    """
+    space = make_space()
+    xy = np.array([[0.0, 0.6], [0.15, 0.75], [4.0, 0.0]])
+    field = ConeField(space, xy, ("blue", "blue", "yellow"))
+    car = pymunk.Body(200.0, pymunk.moment_for_box(200.0, (1.5, 1.2)))
+    shape = pymunk.Poly.create_box(car, (1.5, 1.2))
+    shape.collision_type = COLLISION_CAR
+    space.add(car, shape)
+    field.sleep_all()
+    assert [b.is_sleeping for b in field.bodies] == [False, False, True]
+    t = 0.0
+    for _ in range(400):
+        space.step(DT)
+        t += DT
+        field.update(t)
+    assert field.hit_ids == {0}  # cone 1 touched cone 0 only
+    assert field.awake_count == 0  # all idle again, asleep as Chipmunk grouped them
