@@ -1,8 +1,9 @@
 """Sweep throughput: the same sweep serial, on a 2-process pool, and on a 2-CPU local Ray.
 
-The sweep: 12 short runs (acceleration and skidpad x seeds 0-5, one lap,
-fused localization, rtk sensors, no pictures: drawing ``run.png`` takes
-longer than such a run and is the same work on every executor). Each
+The sweep: 12 runs of the kind a driving sweep is made of (autocross and
+trackdrive x seeds 0-5, two laps, fused localization, rtk sensors; about a
+second each here), with no pictures: drawing ``run.png`` is the same work
+on every executor. Each
 repeat runs the three executors one after the other (interleaved: this
 machine's speed drifts about 2x), each into a new directory through
 ``envs.sweep.run_sweep``; the figures are the medians over the repeats.
@@ -29,7 +30,7 @@ pool. A reference measured in the same run, before and after: bare pymunk
 steps per second (``write_results.pymunk_reference``).
 
 Run: ``.venv/bin/python benchmarks/bench_sweep.py [--repeats N]`` (about
-2 minutes with 3 repeats on 2 idle cores).
+3 minutes with 3 repeats on 2 idle cores).
 """
 
 from __future__ import annotations
@@ -50,9 +51,9 @@ from conesim.envs.sweep_file import load_sweep
 
 SWEEP = """\
 conesim_sweep: 1
-base: {laps: 1, localization: fused, sensors: rtk}
+base: {laps: 2, localization: fused, sensors: rtk}
 axes:
-  track: [acceleration, skidpad]
+  track: [autocross, trackdrive]
   seed: {range: [0, 6]}
 """
 WORKERS = 2
@@ -110,7 +111,7 @@ def main() -> None:
     after, load1 = pymunk_reference(), os.getloadavg()[0]
     med = {k: {f: statistics.median(r[f] for r in v) for f in v[0]} for k, v in figures.items()}
     print(
-        f"sweep of 12 runs (acceleration, skidpad x 6 seeds, 1 lap, fused, no pictures), "
+        f"sweep of 12 runs (autocross, trackdrive x 6 seeds, 2 laps, fused, no pictures), "
         f"median of {args.repeats} interleaved repeats"
     )
     print(f"  reference, bare pymunk: {before:,.0f} steps/s before, {after:,.0f} after")
