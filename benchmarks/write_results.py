@@ -2,16 +2,16 @@
 
 Each ``benchmarks/bench_*.py`` runs in a process of its own; what it prints
 is shown as it comes and kept. ``RESULTS.md`` gets, per script, its output
-in a code block, under a header that says when, on which commit and on what
-machine it was measured, with a reference measured in the same run before
-and after the scripts: bare pymunk steps per second (one dynamic box in an
-empty space), so that a figure can be read against the machine's speed at
-the time (this machine's speed drifts about 2x between quiet and busy
-moments). The file is replaced only when every script has run; a script
-that fails stops the run with its exit status and leaves the old file.
+in a code block, under a line that says when and on which commit it was
+measured, with a reference measured just before and after that script:
+bare pymunk steps per second (one dynamic box in an empty space), so that
+a figure can be read against the machine's speed at the time (this
+machine's speed drifts about 2x between quiet and busy moments). The file
+is replaced only when every script asked for has run; a script that fails
+stops the run with its exit status and leaves the old file.
 
 Usage: ``python benchmarks/write_results.py [--only bench_env,bench_laps]``
-(``--only`` runs those and writes ``RESULTS.md`` with just them).
+(``--only`` reruns those and keeps the other scripts' sections as they were).
 """
 
 from __future__ import annotations
@@ -75,12 +75,46 @@ def run(script: Path) -> str:
     return "".join(lines)
 
 
+def section(script: Path) -> str:
+    """Run one script between two pymunk references; its RESULTS.md section."""
+    started = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
+    before = pymunk_reference()
+    text = run(script)
+    after = pymunk_reference()
+    return "\n".join(
+        [
+            f"## {script.name}\n",
+            f"- measured: {started}, commit {commit()}; bare pymunk (one box, no contacts): "
+            f"{before:,.0f} steps/s before the script, {after:,.0f} after\n",
+            "```",
+            text.rstrip("\n"),
+            "```\n",
+        ]
+    )
+
+
+def kept_sections() -> dict[str, str]:
+    """The sections RESULTS.md holds now, by script name (for ``--only``)."""
+    if not RESULTS.exists():
+        return {}
+    sections: dict[str, str] = {}
+    name = None
+    for line in RESULTS.read_text(encoding="utf-8").splitlines(keepends=True):
+        if line.startswith("## bench_"):
+            name = line[3:].strip()
+            sections[name] = ""
+        if name is not None:
+            sections[name] += line
+    return {k: v.rstrip("\n") + "\n" for k, v in sections.items()}
+
+
 def main() -> int:
     """Run the scripts, then write RESULTS.md."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", help="comma-separated script names (without .py)")
     args = parser.parse_args()
     scripts = sorted(HERE.glob("bench_*.py"))
+    sections: dict[str, str] = {}
     if args.only:
         wanted = {name.strip() for name in args.only.split(",")}
         unknown = wanted - {s.stem for s in scripts}
@@ -88,20 +122,19 @@ def main() -> int:
             print(f"write_results: unknown scripts {sorted(unknown)}", file=sys.stderr)
             return 2
         scripts = [s for s in scripts if s.stem in wanted]
-    started = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
-    before = pymunk_reference()
-    outputs = {script.name: run(script) for script in scripts}
-    after = pymunk_reference()
+        names = {s.name for s in sorted(HERE.glob("bench_*.py"))}
+        sections = {k: v for k, v in kept_sections().items() if k in names}
+    for script in scripts:
+        sections[script.name] = section(script)
     parts = [
         "# Benchmark results\n",
-        "Written by `make bench` (`benchmarks/write_results.py`); do not edit by hand.\n",
-        f"- measured: {started}, commit {commit()}",
-        f"- machine: {machine()}",
-        f"- reference, bare pymunk (one box, no contacts): {before:,.0f} steps/s before the "
-        f"scripts, {after:,.0f} after\n",
+        "Written by `make bench` (`benchmarks/write_results.py`; `--only a,b` reruns those and "
+        "keeps the other sections); do not edit by hand. Each section says when and on which "
+        "commit it was measured, with bare pymunk's speed measured just before and after it "
+        "(this machine's speed drifts about 2x between quiet and busy moments).\n",
+        f"- machine: {machine()}\n",
     ]
-    for name, text in outputs.items():
-        parts += [f"## {name}\n", "```", text.rstrip("\n"), "```\n"]
+    parts += [sections[name] for name in sorted(sections)]
     tmp = RESULTS.with_suffix(".md.tmp")
     tmp.write_text("\n".join(parts), encoding="utf-8")
     os.replace(tmp, RESULTS)
