@@ -10,19 +10,18 @@ edges as FS organisers do, and the result is written in our own format
 The output is deterministic: running it twice writes identical files.
 
 Loops (trackdrive, autocross) are a sequence of segments with a curvature
-each: straights (0), arcs (+-1/R, left positive) and a slalom (a cosine).
-The curvature profile is smoothed (a Gaussian over ~1.5 m, circular for a
-loop) so that curvature ramps in and out of corners like a clothoid, then
-integrated to heading and position. Two "free" straights are lengthened or
-shortened (Newton steps on their two non-parallel directions) until the loop
-closes exactly.
+each: straights (0), arcs (+-1/R, left positive) and a slalom (a cosine),
+closed and coned by ``conesim.tracks.generate.loop.loop_track`` (the same
+code the random track generator uses): the curvature profile is smoothed,
+integrated, and two "free" straights are resized until the loop closes.
 
 Cones (REFERENCES.md, "Formula Student tracks"): blue at +w/2 (left), yellow
 at -w/2 (right), spaced at most 4.5 m on straights (FS: <= 5 m) and closer in
-corners (``cone_spacing``); 4 big orange cones at the start/finish line (two
-each side, 0.6 m apart, as in fssim). The acceleration and skidpad layouts
-copy fssim's published ones (acceleration: 3.8 m wide, 75 m timed, orange
-braking zone to 175 m; skidpad: the FS circles).
+corners (``tracks/generate/cones.py``); 4 big orange cones at the
+start/finish line (two each side, 0.6 m apart, as in fssim), on the edges.
+The acceleration and skidpad layouts copy fssim's published ones
+(acceleration: 3.8 m wide, 75 m timed, orange braking zone to 175 m;
+skidpad: the FS circles).
 
 Global path covariance: RTK fixed (~2 cm sigma, 0.0004 m^2) with small
 variation, and an "RTK float under trees" stretch rising to ~0.02 m^2, above
@@ -32,10 +31,8 @@ the ROS pipeline's red threshold 0.0025 m^2.
 from __future__ import annotations
 
 import argparse
-import math
 import zlib
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Sequence
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -45,158 +42,15 @@ from scipy.ndimage import gaussian_filter1d
 
 from conesim.core.pose import Pose2D
 from conesim.tracks import ConeKind, Layout, Track, check_report, read_track, write_track
+from conesim.tracks.generate.centreline import arc, slalom, straight
+from conesim.tracks.generate.loop import loop_track
 from conesim.tracks.global_path import global_path_from_centreline, write_global_path_csv
 
 FloatArray = NDArray[np.float64]
 
 ROOT = Path(__file__).resolve().parents[1]
-STEP = 0.05  # [m] integration step of the centreline
-SMOOTH_SIGMA_M = 1.5  # [m] Gaussian smoothing of the curvature profile
-MAX_SPACING = 4.5  # [m] cone spacing on straights (FS: <= 5 m)
-MIN_SPACING = 1.5  # [m] cone spacing in the tightest corners
-BIG_ORANGE_HALF_GAP = 0.3  # [m] big orange cones stand +-0.3 m from the line (fssim)
-START_BEHIND_LINE = 4.0  # [m] standing start behind the start/finish line
 RTK_FIXED_COV = 0.0004  # [m^2] 2 cm sigma
 RTK_FLOAT_COV = 0.02  # [m^2] ~14 cm sigma: the ROS pipeline draws it red (> 0.0025 m^2)
-
-
-@dataclass(frozen=True)
-class Segment:
-    """A piece of centreline with a curvature profile.
-
-    Attributes:
-        length: [m].
-        curvature: maps arc length within the segment (k,) [m] to curvature [1/m].
-        free: a straight whose length the loop closure may change.
-    """
-
-    length: float
-    curvature: Callable[[FloatArray], FloatArray]
-    free: bool = False
-
-
-def straight(length: float, free: bool = False) -> Segment:
-    """A straight of ``length`` [m]."""
-    return Segment(length, np.zeros_like, free)
-
-
-def arc(radius: float, angle_deg: float) -> Segment:
-    """An arc of ``radius`` [m] turning ``angle_deg`` (left positive)."""
-    angle = math.radians(angle_deg)
-    length = radius * abs(angle)
-    return Segment(length, lambda s: np.full_like(s, math.copysign(1.0 / radius, angle)))
-
-
-def slalom(length: float, radius: float, periods: int) -> Segment:
-    """A weave: curvature (1/radius) cos(2 pi periods s / length), no net turn."""
-    wavelength = length / periods
-    return Segment(length, lambda s: np.cos(2 * np.pi * s / wavelength) / radius)
-
-
-def curvature_profile(segments: Sequence[Segment], closed: bool) -> tuple[FloatArray, list[slice]]:
-    """Curvature at every STEP of the centreline, smoothed, and the free straights' samples."""
-    parts, free, start = [], [], 0
-    for seg in segments:
-        count = max(1, round(seg.length / STEP))
-        s = (np.arange(count, dtype=np.float64) + 0.5) * (seg.length / count)
-        kappa = seg.curvature(s) * (seg.length / count) / STEP  # keep the segment's total turn
-        parts.append(kappa)
-        if seg.free:
-            free.append(slice(start, start + count))
-        start += count
-    kappa = np.concatenate(parts)
-    mode = "wrap" if closed else "nearest"
-    return gaussian_filter1d(kappa, SMOOTH_SIGMA_M / STEP, mode=mode), free
-
-
-def integrate(kappa: FloatArray, heading0: float = 0.0) -> tuple[FloatArray, FloatArray]:
-    """Points (n + 1, 2) [m] and headings (n,) [rad] of a curvature profile at STEP."""
-    heading = heading0 + np.cumsum(kappa * STEP) - 0.5 * kappa * STEP
-    steps = STEP * np.column_stack([np.cos(heading), np.sin(heading)])
-    return np.vstack([[0.0, 0.0], np.cumsum(steps, axis=0)]), heading
-
-
-def closed_loop(segments: list[Segment]) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """A closed centreline: points (n, 2) [m], headings (n,) [rad], curvature (n,) [1/m].
-
-    The two free straights are resized (Newton steps) until the loop closes
-    to within a STEP; the last few millimetres are spread along the loop.
-    """
-    segs = list(segments)
-    free_idx = [i for i, seg in enumerate(segs) if seg.free]
-    if len(free_idx) != 2:
-        raise ValueError("a loop needs exactly two free straights to close")
-    for _ in range(20):
-        kappa, free = curvature_profile(segs, closed=True)
-        points, heading = integrate(kappa)
-        miss = points[-1] - points[0]
-        if np.hypot(*miss) < STEP:
-            spread = np.linspace(0.0, 1.0, len(points))[:, None] * miss
-            return (points - spread)[:-1], heading, kappa
-        dirs = np.column_stack(
-            [[np.cos(heading[f]).mean(), np.sin(heading[f]).mean()] for f in free]
-        )
-        delta = np.linalg.solve(dirs, -miss)
-        for i, d in zip(free_idx, delta, strict=True):
-            new = segs[i].length + float(d)
-            if new <= 1.0:
-                raise ValueError(f"loop closure needs a free straight of {new:.1f} m")
-            segs[i] = straight(new, free=True)
-    raise ValueError("loop closure did not converge")
-
-
-def cone_spacing(radius: FloatArray) -> FloatArray:
-    """Cone spacing [m] on a boundary of local radius ``radius`` [m]: 0.9 sqrt(R),
-    from 1.5 m in the tightest corners to 4.5 m on straights (FS: <= 5 m)."""
-    return np.clip(0.9 * np.sqrt(radius), MIN_SPACING, MAX_SPACING)
-
-
-def place_cones(edge: FloatArray, edge_kappa: FloatArray) -> FloatArray:
-    """Cones along a closed edge (n, 2) [m], starting at its first point.
-
-    The cone density 1/spacing is integrated along the edge and the cones
-    stand at equal steps of it, so that spacing follows the curvature and the
-    last gap equals its neighbours.
-    """
-    seg = np.hypot(*np.diff(np.vstack([edge, edge[:1]]), axis=0).T)
-    density = 1.0 / cone_spacing(1.0 / np.maximum(np.abs(edge_kappa), 1e-6))
-    cum = np.concatenate([[0.0], np.cumsum(density * seg)])
-    count = math.ceil(cum[-1])
-    s_edge = np.concatenate([[0.0], np.cumsum(seg)])
-    s = np.interp(np.arange(count) * cum[-1] / count, cum, s_edge)
-    ring = np.vstack([edge, edge[:1]])
-    return np.column_stack([np.interp(s, s_edge, ring[:, 0]), np.interp(s, s_edge, ring[:, 1])])
-
-
-def loop_track(
-    name: str, segments: list[Segment], width: float, line_at: float, description: str
-) -> Track:
-    """A closed track from segments, the start/finish line ``line_at`` [m] from the start."""
-    points, heading, kappa = closed_loop(segments)
-    shift = round(line_at / STEP)
-    points, heading, kappa = (np.roll(a, -shift, axis=0) for a in (points, heading, kappa))
-    # Smoothing leaks a little of the last corner's turn past the start; turn
-    # the whole loop so that it starts exactly eastwards at the origin.
-    c, s = math.cos(heading[0]), math.sin(heading[0])
-    points = (points - points[0]) @ np.array([[c, -s], [s, c]])
-    heading = heading - heading[0]
-    normal = np.column_stack([-np.sin(heading), np.cos(heading)])
-    cones, kinds = [], []
-    for sign, kind in ((1.0, ConeKind.BLUE), (-1.0, ConeKind.YELLOW)):
-        offset = sign * width / 2
-        edge = points + offset * normal
-        placed = place_cones(edge, kappa / (1.0 - kappa * offset))
-        cones.append(placed[1:])  # the cone on the line gives way to the big orange ones
-        kinds += [kind] * (len(placed) - 1)
-        along = np.array([np.cos(heading[0]), np.sin(heading[0])])
-        for d in (-BIG_ORANGE_HALF_GAP, BIG_ORANGE_HALF_GAP):
-            cones.append((edge[0] + d * along)[None])
-            kinds.append(ConeKind.BIG_ORANGE)
-    back = -round(START_BEHIND_LINE / STEP)
-    start = Pose2D(float(points[back, 0]), float(points[back, 1]), float(heading[back]))
-    return Track(
-        name, np.vstack(cones), tuple(kinds), start, Layout.CLOSED, description=description
-    )
 
 
 def trackdrive() -> Track:

@@ -1,0 +1,1 @@
+"""Track generation: loops from segments, their cones and gate (see generator.py)."""
