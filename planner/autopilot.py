@@ -20,8 +20,9 @@ localization), the global path, and the messages it receives.
   ``reference`` into the current ``os_sensor`` frame, pure pursuit steers
   toward its lookahead point, and the PI controller tracks the waypoint
   speeds, within the friction ellipse left by the lateral acceleration the
-  steering asks for (v^2 tan(delta) / L). Without a path the car brakes to
-  a stop with the wheels straight.
+  steering asks for (v^2 tan(delta) / L), and not accelerating while the
+  steering is at full lock (``full_lock_share``). Without a path the car
+  brakes to a stop with the wheels straight.
 
 Building an autopilot runs one planning step on a made-up track
 (``warm_up_planner``), once per process: the planner's compiled kernels load
@@ -296,17 +297,27 @@ class Autopilot:
     ) -> FloatArray:
         """The waypoints' speeds from the global path's plan (``speed_source``
         ``"global"``) or the local profile ending at its speed where the path
-        ends (``"local"``); a path of one point or none gets the local profile."""
+        ends (``"local"``); a path of one point or none gets the local profile.
+
+        With ``horizon_stop`` the global plan's speeds are held to what
+        brakes at ``a_brake`` to the global speed v_end at the end of the
+        path in view, v_i^2 <= v_end^2 + 2 a_brake (s_end - s_i): the plan
+        never runs faster than the car can slow to what lies beyond what it
+        sees (the global path there may be wrong: a gate's kink, a survey's
+        error).
+        """
         assert self.global_speed is not None
         profile = self.config.speed_profile
         if len(path) <= 1:
             return speed_profile(path, profile, self.speed(), s=s)
         s = arc_length(path) if s is None else s
+        v_end = self.global_speed.speed_at(sensor_station + float(path[0, 0]) + float(s[-1]))
         if self.config.speed_source == "global":
             v = self.global_speed.speeds_at(self._stations(path, s, sensor_station))
+            if profile.horizon_stop:  # brake to v_end at the end of the path in view
+                v = np.minimum(v, np.sqrt(v_end * v_end + 2.0 * profile.a_brake * (s[-1] - s)))
             v[0] = min(v[0], max(self.speed(), 0.0))
             return forward_pass(s, v, profile.a_drive)
-        v_end = self.global_speed.speed_at(sensor_station + float(s[-1]))
         return speed_profile(path, profile, self.speed(), s=s, v_end=v_end)
 
     def _global_curvature(self, path: FloatArray, sensor_station: float) -> FloatArray:
@@ -363,6 +374,10 @@ class Autopilot:
         self.target_speed = v_ref
         a_lat = speed * speed * math.tan(self.steering.steering) / c.pure_pursuit.wheelbase
         acceleration = self.speed_controller.step(v_ref, speed, dt, a_ff, a_lat)
+        lock = c.speed_control.full_lock_share * c.pure_pursuit.max_steer
+        if abs(self.steering.steering) >= lock:
+            # At full lock the car turns no tighter; faster, it only runs wider.
+            acceleration = min(acceleration, 0.0)
         self.command = ControlCommand(t, self.steering.steering, acceleration)
         return self.command
 

@@ -27,6 +27,7 @@ from typing import Any, Self
 from conesim.core.messages import CONE_COLOURS, FRAME_OS_SENSOR, FRAME_REFERENCE
 from conesim.planner.settings import (
     BridgeSettings,
+    LaneSettings,
     LimitSettings,
     OrderingSettings,
     PartnerSettings,
@@ -169,6 +170,21 @@ class MidlineConfig(Settings):
         spacing: arc-length step of the resampled path [m] (spec 000: 0.5 m).
         max_start_distance: the path must start this close to the sensor [m].
         min_path_length: a shorter path is not sound [m].
+        doubled_cone_distance: of two cones of one side closer than this,
+            the outer one is left out (``midline.merge_doubled``; a gate's
+            big orange cones stand 0.3 m from the line, beside the edge's
+            cone, FS cones at most 5 m and in corners 1.5 m apart) [m]; 0: none.
+        keep_in_lane: move the fitted path into the lane less the car's
+            body (``planner.lane``); False keeps the midline.
+        lane_iterations: sweeps of the elastic band that then moves it,
+            within that room, towards the least curvature
+            (``kernels.lane_path``).
+        body_half_width: half the car's width [m] (``VehicleParams.width`` 1.4 m).
+        body_front: the car's front end ahead of the rear axle [m]
+            (wheelbase 1.53 m plus the 0.75 m front overhang), which sweeps
+            outside a tight turn.
+        lane_clearance: what the body keeps from the line between two
+            boundary cones [m]: a cone's radius (0.11 m) and tracking error.
     """
 
     max_range: float = 30.0  # [m]
@@ -202,6 +218,12 @@ class MidlineConfig(Settings):
     # 4 m: a path shorter than pure pursuit's lookahead puts the target at its
     # end; at the skidpad's crossing a 2 m path steered the car to full lock.
     min_path_length: float = 4.0  # [m]
+    doubled_cone_distance: float = 1.0  # [m]
+    keep_in_lane: bool = True
+    lane_iterations: int = 20
+    body_half_width: float = 0.7  # [m]
+    body_front: float = 2.28  # [m]
+    lane_clearance: float = 0.25  # [m]
 
     def __post_init__(self) -> None:
         owner = "MidlineConfig"
@@ -230,6 +252,10 @@ class MidlineConfig(Settings):
             "start_station_ahead",
             "max_start_distance",
             "min_path_length",
+            "body_half_width",
+            "doubled_cone_distance",
+            "body_front",
+            "lane_clearance",
         ):
             _check(owner, name, getattr(self, name), 0.0)
         _check(owner, "max_track_width", self.max_track_width, self.min_track_width)
@@ -237,6 +263,7 @@ class MidlineConfig(Settings):
         _check(owner, "spline_degree", self.spline_degree, 1, 5)
         _check(owner, "min_spline_points", self.min_spline_points, self.spline_degree + 1)
         _check(owner, "min_width_samples", self.min_width_samples, 1)
+        _check(owner, "lane_iterations", self.lane_iterations, 0)
         if self.bridge_selection not in ("shortest", "all"):
             raise ValueError(
                 f"{owner}.bridge_selection = {self.bridge_selection!r}: allowed 'shortest', 'all'"
@@ -265,6 +292,14 @@ class MidlineConfig(Settings):
         """Step 4's settings: the start's, then the chain's."""
         return from_fields(OrderingSettings, self)
 
+    @cached_property
+    def lane_settings(self) -> LaneSettings:
+        """Step 5b's settings: the body, its clearance and the band's sweeps."""
+        return from_fields(
+            LaneSettings, self, clearance=float(self.lane_clearance),
+            iterations=int(self.lane_iterations),
+        )  # fmt: skip
+
 
 @dataclass(frozen=True)
 class SpeedProfileConfig(Settings):
@@ -291,6 +326,14 @@ class SpeedProfileConfig(Settings):
         friction_ellipse: the drive and brake passes use only the grip the
             corner leaves, ``a * sqrt(1 - (a_lat / a_lat(v))^2)``
             (``planner.speed_profile``).
+        lock_radius: the car's full-lock radius at the rear axle [m]
+            (L / tan(max_steer) = 1.53 / tan(0.47) = 3.0 m). Near it the car
+            has no steering left to correct with, and its front end sweeps
+            out: the lateral limit is taken times
+            ``max(1 - (|kappa| lock_radius)^4, lock_share_min)`` (R 6 m: 0.94,
+            R 4 m: 0.68, R 3.3 m: 0.32); 0: no such cut.
+        lock_share_min: the least share of the lateral limit left [-]
+            (0.15: 2.5 m/s in a 3 m hairpin).
     """
 
     # The tyre (fssim D = 1.6, mu = 1) grips 1.6 g = 15.7 m/s^2 before downforce;
@@ -307,6 +350,8 @@ class SpeedProfileConfig(Settings):
     lateral_jerk_max: float = 60.0  # [m/s^3] skidpad crossing ~10 m/s, lap tests seeds 0-5
     jerk_window: float = 4.0  # [m]
     friction_ellipse: bool = True
+    lock_radius: float = 3.0  # [m]
+    lock_share_min: float = 0.15  # [-]
 
     def __post_init__(self) -> None:
         for name in ("a_lat_max", "a_drive", "a_brake", "v_max"):
@@ -315,6 +360,8 @@ class SpeedProfileConfig(Settings):
         _check("SpeedProfileConfig", "lateral_jerk_max", self.lateral_jerk_max, 1e-9)
         _check("SpeedProfileConfig", "jerk_window", self.jerk_window, 0.0)
         _check("SpeedProfileConfig", "curvature_window", self.curvature_window, 0.0)
+        _check("SpeedProfileConfig", "lock_radius", self.lock_radius, 0.0)
+        _check("SpeedProfileConfig", "lock_share_min", self.lock_share_min, 1e-9, 1.0)
 
     # The groups the compiled profile (``planner.kernels``) reads by name, built
     # once per settings object.
@@ -407,6 +454,9 @@ class SpeedControlConfig(Settings):
             leaves [-] (none of the drive's is left at the grip).
         preview_time: the target speed is read this far ahead along the path [s].
         preview_min: and at least this far [m].
+        full_lock_share: while pure pursuit steers at least this share of
+            ``max_steer``, the car does not accelerate [-]: at full lock it
+            turns no tighter, and faster it runs wide (out of a 3 m hairpin).
     """
 
     kp: float = 1.5  # [1/s]
@@ -424,6 +474,7 @@ class SpeedControlConfig(Settings):
     ellipse_floor: float = 0.3  # [-]
     preview_time: float = 0.3  # [s]
     preview_min: float = 1.0  # [m]
+    full_lock_share: float = 0.95  # [-]
 
     def __post_init__(self) -> None:
         for name in (
@@ -439,6 +490,7 @@ class SpeedControlConfig(Settings):
         for name in ("max_accel", "max_decel", "lateral_grip"):
             _check("SpeedControlConfig", name, getattr(self, name), 1e-9)
         _check("SpeedControlConfig", "ellipse_floor", self.ellipse_floor, 0.0, 1.0)
+        _check("SpeedControlConfig", "full_lock_share", self.full_lock_share, 0.0, 1.0)
         _check("SpeedControlConfig", "grip_aero", self.grip_aero, 0.0)
 
 

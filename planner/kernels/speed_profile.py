@@ -110,10 +110,15 @@ def profile_limits(points, s, has_s, limits):
                 hi = min(max(i + half + 1, 0), n)
                 smooth[i] = (c[hi] - c[lo]) / (hi - lo)
             kappa = smooth
+    lock = limits.lock_radius
+    share_min = limits.lock_share_min
     v = np.empty(n)
     for i in range(n):
         k = abs(kappa[i]) - a_lat_aero
-        v[i] = math.sqrt(a_lat / k) if k > floor else v_max
+        x = abs(kappa[i]) * lock
+        x = x * x
+        share = max(1.0 - x * x, share_min)
+        v[i] = math.sqrt(a_lat * share / k) if k > floor else v_max
     ratio = np.empty(0)
     half = _half_window(jerk_window, spacing, n, True) if n > 2 else 0
     if jerk_max < math.inf and half >= 1 and n >= 2 * half + 1:

@@ -56,10 +56,15 @@ def window_mean(values: FloatArray, spacing: float, window: float) -> FloatArray
 
 
 def curvature_limit(kappa: FloatArray, config: SpeedProfileConfig) -> FloatArray:
-    """Step 2: min(v_max, sqrt(a_lat_max / (|kappa| - a_lat_aero))) [m/s], shape of ``kappa``."""
+    """Step 2: min(v_max, sqrt(a_lat_max share / (|kappa| - a_lat_aero))) [m/s], shape of
+    ``kappa``, share = max(1 - (|kappa| lock_radius)^4, lock_share_min)."""
     k = np.abs(kappa) - config.a_lat_aero
     floor = config.a_lat_max / config.v_max**2  # below this, v_max binds
-    return np.where(k > floor, np.sqrt(config.a_lat_max / np.maximum(k, floor)), config.v_max)
+    x = np.abs(kappa) * config.lock_radius
+    x = x * x
+    share = np.maximum(1.0 - x * x, config.lock_share_min)
+    a_lat = config.a_lat_max * share
+    return np.where(k > floor, np.sqrt(a_lat / np.maximum(k, floor)), config.v_max)
 
 
 def jerk_limit(kappa: FloatArray, spacing: float, config: SpeedProfileConfig) -> FloatArray | None:
