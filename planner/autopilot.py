@@ -70,6 +70,7 @@ from conesim.localization.frames import (
 from conesim.planner.classify import ClassifiedCones, classify_cones_by_side
 from conesim.planner.config import AutopilotConfig
 from conesim.planner.geometry import FloatArray, PathProjector, arc_length
+from conesim.planner.global_fit import smoothed_global_path
 from conesim.planner.global_speed import GlobalSpeedPlan
 from conesim.planner.messages import ControlCommand
 from conesim.planner.midline import LocalPlan, PlanStatus, reference_path_planning
@@ -183,6 +184,8 @@ class Autopilot:
         self.buffer = buffer
         self.config = config or AutopilotConfig()
         self.control_rate = float(control_rate)
+        global_path = smoothed_global_path(global_path, self.config.global_path_min_scatter)
+        self.global_path = global_path
         self.projector = PathProjector(global_path.polyline)
         self.global_speed = (
             GlobalSpeedPlan(global_path, self.config.speed_profile)

@@ -536,6 +536,10 @@ class AutopilotConfig(Settings):
             in ``reference`` by the pose, lies within this distance of the
             global path [m]: where the map and the cones disagree by more
             (a poor pose), the car keeps to the cones.
+        global_path_min_scatter: a global path whose points scatter more
+            than this about a smooth curve is smoothed before use
+            (``planner.global_fit``: a surveyed path's error would read as
+            curvature) [m].
         speed_window: span of the frame-tree speed estimate used when no wheel
             speed has arrived [s].
         reference_frame: the world frame (a vehicle prefix is allowed).
@@ -551,6 +555,7 @@ class AutopilotConfig(Settings):
     speed_source: str = "global"
     pursue_global_beyond_path: bool = True
     pursue_global_max_gap: float = 1.0  # [m] raw pose (150 ms late): gaps up to 0.7 m
+    global_path_min_scatter: float = 0.05  # [m] exact paths: 0.01-0.02 m
     speed_window: float = 0.1  # [s]
     reference_frame: str = FRAME_REFERENCE
     sensor_frame: str = FRAME_OS_SENSOR
@@ -579,6 +584,7 @@ class AutopilotConfig(Settings):
 
     def __post_init__(self) -> None:
         _check("AutopilotConfig", "speed_window", self.speed_window, 1e-9)
+        _check("AutopilotConfig", "global_path_min_scatter", self.global_path_min_scatter, 0.0)
         _check("AutopilotConfig", "pursue_global_max_gap", self.pursue_global_max_gap, 0.0)
         if self.speed_source not in ("local", "global"):
             raise ValueError(
