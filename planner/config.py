@@ -77,10 +77,15 @@ class ClassifierConfig(Settings):
     """Settings of ``classify_cones_by_side``.
 
     Attributes:
-        mode: ``"geometric"`` (the ROS pipeline: side of the nearest global-path
-            segment, colour ignored) or ``"colour"`` (a colour listed below
-            decides; any other colour, and a colour-blind detection, falls back
-            to geometric).
+        mode: ``"colour"`` (a colour listed below decides, unless the
+            geometry clearly disagrees; any other colour, and a colour-blind
+            detection, falls back to geometric) or ``"geometric"`` (the ROS
+            pipeline: side of the nearest global-path segment, colour ignored).
+        geometry_overrules: in colour mode, a cone farther than this from the
+            global path on the other side than its colour says is taken by
+            its side, a colour swap [m] (a boundary cone stands half the
+            lane, >= 1.5 m, out; a survey's bias shifts that by 0.3 m); inf:
+            the colour always decides.
         left_colours: colours taken as left cones in colour mode (FS rules: blue).
         right_colours: colours taken as right cones in colour mode (FS: yellow).
         window_back: the stretch of global path preferred for projection
@@ -94,7 +99,8 @@ class ClassifierConfig(Settings):
             ``inf`` projects onto the stretch only.
     """
 
-    mode: str = "geometric"
+    mode: str = "colour"
+    geometry_overrules: float = 0.75  # [m]
     left_colours: tuple[str, ...] = ("blue",)
     right_colours: tuple[str, ...] = ("yellow",)
     window_back: float = 20.0  # [m] a 360 deg detector also sees 15-20 m behind
@@ -102,7 +108,7 @@ class ClassifierConfig(Settings):
     window_penalty: float = 2.0  # [m]
 
     def __post_init__(self) -> None:
-        for name in ("window_back", "window_ahead", "window_penalty"):
+        for name in ("window_back", "window_ahead", "window_penalty", "geometry_overrules"):
             _check("ClassifierConfig", name, getattr(self, name), 0.0)
         if self.mode not in ("geometric", "colour"):
             raise ValueError(
