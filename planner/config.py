@@ -340,6 +340,17 @@ class SpeedProfileConfig(Settings):
             R 4 m: 0.68, R 3.3 m: 0.32); 0: no such cut.
         lock_share_min: the least share of the lateral limit left [-]
             (0.15: 2.5 m/s in a 3 m hairpin).
+        steering_rate_max: the wheels turn at most this fast [rad/s]; the
+            steering a path needs, delta = atan(L kappa), changes at
+            v L |dkappa/ds| / (1 + (L kappa)^2) (the slope over
+            ``jerk_window``). Pure pursuit's lookahead spreads a change over
+            its distance, except near full lock, where the car has no
+            steering to spare: v is held to steering_rate_max
+            (1 + (L kappa)^2) / (L |dkappa/ds| |kappa| lock_radius). Out of
+            a right kink into a left hairpin of 3.3 m (kappa -0.1 to 0.3 1/m
+            in 3 m) that is 4.2 m/s; on the skidpad's crossing (R 9.1 m) it
+            does not bind. inf: no limit.
+        wheelbase: L [m] (fssim 1.53 m).
     """
 
     # The tyre (fssim D = 1.6, mu = 1) grips 1.6 g = 15.7 m/s^2 before downforce;
@@ -358,6 +369,8 @@ class SpeedProfileConfig(Settings):
     friction_ellipse: bool = True
     lock_radius: float = 3.0  # [m]
     lock_share_min: float = 0.15  # [-]
+    steering_rate_max: float = 0.63  # [rad/s] EUFS QEV3 (VehicleParams.max_steer_rate)
+    wheelbase: float = 1.53  # [m]
 
     def __post_init__(self) -> None:
         for name in ("a_lat_max", "a_drive", "a_brake", "v_max"):
@@ -367,6 +380,8 @@ class SpeedProfileConfig(Settings):
         _check("SpeedProfileConfig", "jerk_window", self.jerk_window, 0.0)
         _check("SpeedProfileConfig", "curvature_window", self.curvature_window, 0.0)
         _check("SpeedProfileConfig", "lock_radius", self.lock_radius, 0.0)
+        _check("SpeedProfileConfig", "steering_rate_max", self.steering_rate_max, 1e-9)
+        _check("SpeedProfileConfig", "wheelbase", self.wheelbase, 1e-9)
         _check("SpeedProfileConfig", "lock_share_min", self.lock_share_min, 1e-9, 1.0)
 
     # The groups the compiled profile (``planner.kernels``) reads by name, built

@@ -145,6 +145,8 @@ class LimitSettings(NamedTuple):
         lock_radius: the car's full-lock turning radius [m]; the lateral
             limit shrinks towards it (0: never).
         lock_share_min: the least share of the lateral limit left there [-].
+        steering_rate_max: the steering-rate limit [rad/s]; inf: none.
+        wheelbase: the car's wheelbase L [m], for it.
     """
 
     curvature_window: float
@@ -156,6 +158,8 @@ class LimitSettings(NamedTuple):
     jerk_window: float
     lock_radius: float
     lock_share_min: float
+    steering_rate_max: float
+    wheelbase: float
 
 
 class PassSettings(NamedTuple):

@@ -22,6 +22,7 @@ from conesim.planner.speed_profile import forward_pass, profile_curvature
 # no cut near full lock (each tested on its own).
 LIMITS = {
     "lock_radius": 0.0,
+    "steering_rate_max": math.inf,
     "a_lat_max": 6.0,
     "a_lat_aero": 0.0,
     "a_brake": 6.0,
