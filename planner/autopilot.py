@@ -303,11 +303,12 @@ class Autopilot:
         ends (``"local"``); a path of one point or none gets the local profile.
 
         With ``horizon_stop`` the global plan's speeds are held to what
-        brakes at ``a_brake`` to the global speed v_end at the end of the
-        path in view, v_i^2 <= v_end^2 + 2 a_brake (s_end - s_i): the plan
-        never runs faster than the car can slow to what lies beyond what it
-        sees (the global path there may be wrong: a gate's kink, a survey's
-        error).
+        brakes at ``a_brake`` to v_end at the end of the path in view,
+        v_i^2 <= v_end^2 + 2 a_brake (s_end - s_i): v_end is the global
+        plan's speed there where the path's end lies on the map (within
+        ``pursue_global_max_gap`` of the global path), and 0 where it does
+        not: where the map and the cones disagree the car can always stop
+        within what it has seen.
         """
         assert self.global_speed is not None
         profile = self.config.speed_profile
@@ -315,6 +316,8 @@ class Autopilot:
             return speed_profile(path, profile, self.speed(), s=s)
         s = arc_length(path) if s is None else s
         v_end = self.global_speed.speed_at(sensor_station + float(path[0, 0]) + float(s[-1]))
+        if not self._end_on_map(path, sensor_station):
+            v_end = 0.0  # the map and the cones disagree there: stop within what is seen
         if self.config.speed_source == "global":
             v = self.global_speed.speeds_at(self._stations(path, s, sensor_station))
             if profile.horizon_stop:  # brake to v_end at the end of the path in view
@@ -322,6 +325,19 @@ class Autopilot:
             v[0] = min(v[0], max(self.speed(), 0.0))
             return forward_pass(s, v, profile.a_drive)
         return speed_profile(path, profile, self.speed(), s=s, v_end=v_end)
+
+    def _end_on_map(self, path: FloatArray, sensor_station: float) -> bool:
+        """Whether the path's end, placed in ``reference`` by the latest pose, lies
+        within ``pursue_global_max_gap`` of the global path (searched from 5 m
+        behind the sensor's station to the planner's range ahead)."""
+        c = self.config
+        try:
+            end = self.buffer.transform_points(c.reference_frame, c.sensor_frame, path[-1:], LATEST)
+        except TransformError:
+            return False
+        window = (sensor_station - 5.0, sensor_station + c.midline.max_range)
+        gap = float(self.projector.project(end, window=window).distance[0])
+        return gap <= c.pursue_global_max_gap
 
     def _global_curvature(self, path: FloatArray, sensor_station: float) -> FloatArray:
         """The global path's curvature at the waypoints (``speed_source`` ``"global"``;
