@@ -11,8 +11,9 @@ less the body's clearance, towards the smoothest path
 (``kernels.lane_path``, an elastic band): it uses the lane's width in a
 corner, and where the fitted spline ran closer to a cone than the body
 allows, it is pushed back into the lane. Where a boundary edge is missing
-(a knocked cone's gap, the end of the view), the room is the lane's half
-width from the path, as if the line ran on: a gap is no way out.
+(a knocked cone's gap, the end of the view), the room is measured to the
+lane's half width from the path, as if the line ran on: the band does not
+draw the path out through the gap.
 """
 
 from __future__ import annotations
