@@ -20,5 +20,5 @@ def test_noise_and_bias_have_the_stated_sizes() -> None:
     assert_allclose(error.std(axis=0), 0.2, rtol=0.05)
     assert_allclose(surveyed(exact, PathSurvey(0.2, 0.3, 7)).xy, path.xy)  # per seed
     assert surveyed(exact, PathSurvey()) is exact
-    with pytest.raises(ValueError, match="PathSurvey.bias = -0.1 is out of range"):
+    with pytest.raises(ValueError, match=r"PathSurvey\.bias = -0\.1 is out of range"):
         PathSurvey(bias=-0.1)
