@@ -13,7 +13,7 @@ import pytest
 from conesim.envs.runner import RunResult, run_scenario
 from conesim.envs.scenario import Scenario
 from conesim.tracks import Track, write_track
-from conesim.tracks.generate.hard import hairpin_loop
+from conesim.tracks.generate.hard import hairpin_loop, hard_loop
 from conesim.tracks.survey import PathSurvey
 
 
@@ -43,4 +43,14 @@ def test_a_surveyed_global_path_is_enough(track: str) -> None:
     """A global path with 0.2 m of noise per point and a 0.3 m bias: still clean."""
     survey = PathSurvey(noise=0.2, bias=0.3, seed=1)
     r = run_scenario(Scenario(track=track, laps=1, seed=0, global_path=survey))
+    assert clean(r), (r.end_reason, r.events.cones_down_or_out)
+
+
+@pytest.mark.parametrize("seed", [1, 17])
+def test_hard_loops_with_a_gate_wider_than_the_lane(seed: int, tmp_path: Path) -> None:
+    """Hard loops (``tracks.generate.hard``) 3.3 and 3.16 m wide whose big orange
+    cones stand 0.6 m outside the lane: a clean lap from standstill."""
+    track = hard_loop(seed)
+    assert "gate 0.6 m" in track.description
+    r = run_scenario(written(track, tmp_path), laps=1, seed=0)
     assert clean(r), (r.end_reason, r.events.cones_down_or_out)
