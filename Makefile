@@ -11,7 +11,7 @@ $(BIN)/python:
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
 $(STAMP): $(BIN)/python pyproject.toml
-	$(BIN)/python -m pip install --quiet -e '.[dev,render,ros]'
+	$(BIN)/python -m pip install --quiet -e '.[dev,render,ros,ray]'
 	touch $(STAMP)
 
 # A headless closed-loop lap on the default track (trackdrive): rtk sensors,

@@ -1,11 +1,17 @@
-"""The closed loop's speed and the autopilot's lap time.
+"""The env's speed, layer by layer, the closed loop's and the autopilot's lap time.
 
 Prints (timing never decides a test):
 
-1. env steps per second with a random policy (``ideal`` and ``rtk`` sensors,
-   ``fused`` localization), and in the same run the time spent in the bare
-   physics it contains (``World`` steps minus sensors), so the overhead of
-   the env, the sensors and localization is visible;
+0. the machine's speed now: bare pymunk steps per second (one box, no
+   contacts: ``timing.pymunk_reference``, as ``write_results``), before and after section 1;
+1. env steps per second with a random policy on autocross, for truth
+   localization with ideal sensors and for the default configuration (rtk,
+   fused), the time inside the closed loop (``ClosedLoop.step``:
+   localization and the frame tree) timed within that run, then the same
+   commands replayed through each layer below alone: ``World.step``
+   (sensors, race control), the car model and pymunk (``Vehicle.pre_step`` /
+   ``post_step`` and ``Space.step``) and pymunk's ``Space.step`` alone, so
+   that the time per env step splits into the layers' shares;
 2. the real-time factor of ``conesim run``'s loop on autocross, full stack
    (sensors, EKF, planner, control), one core;
 3. the autopilot's best lap against the friction-limited lap time along the
@@ -15,96 +21,216 @@ Prints (timing never decides a test):
    rtk/fused run (the design card names filterpy's EKF; these calls are its
    numpy code, not ours), per env step and per simulated second, and the
    ceilings that time alone puts on the figures of issue 6 with everything
-   else (physics, sensors, planner, our own EKF code) taken as free.
+   else (physics, sensors, planner, our own EKF code) taken as free;
+5. vector envs: env steps per second (wall clock) of one env against
+   ``gymnasium.make_vec`` with 2 async workers, with the load average (the
+   ratio means something only on idle cores).
 
-Section 1 times CPU time (``time.process_time``), so that another process on
-a busy machine does not inflate it; section 2 reports the run's wall time.
+Sections 1 and 4 time CPU time (``time.process_time``), so that another
+process on a busy machine does not inflate them; sections 2 and 5 report
+wall time.
 
-The bare physics and the World steps replay the env's actions (the same
-commands, held for the same substeps), so they time the car driving as in
-the env run, not standing still.
-
-Run: ``.venv/bin/python benchmarks/bench_env.py [--sections 1,2,3,4]
-[--localization fused|raw|truth]``.
+Run: ``.venv/bin/python benchmarks/bench_env.py [--sections 0,1,2,3,4,5]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import time
+from pathlib import Path
+from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 
+from conesim import ENV_ID
 from conesim.envs.cone_track_env import ConeTrackEnv
+from conesim.envs.loop import StepRecord
 from conesim.envs.runner import run_scenario
+from conesim.planner.messages import ControlCommand
 
-from timing import timed_calls
+from timing import pymunk_reference, timed_calls
 
 STEPS = 1500
+LAYERS = ("env", "loop", "World.step", "car + pymunk", "pymunk")
+CONFIGS: tuple[tuple[str, dict[str, Any]], ...] = (
+    ("ideal sensors, truth", {"sensors": "ideal", "localization": "truth"}),
+    ("rtk sensors, fused (default)", {}),
+    # What the design's 200 Hz physics (4 steps per action) costs: half of them.
+    (
+        "ideal sensors, truth, physics 100 Hz",
+        {"sensors": "ideal", "localization": "truth", "physics_rate": 100.0},
+    ),
+)
 
 
-def env_rate(sensors: str, localization: str = "fused") -> tuple[float, float, float]:
-    """(env steps/s, fraction of time in physics, fraction in World.step)."""
-    env = ConeTrackEnv(
-        track="autocross", sensors=sensors, localization=localization, terminate_off_track=False
-    )
-    env.reset(seed=0)
+def layer_rates(repeats: int = 3, **kwargs: Any) -> dict[str, float]:
+    """Env steps/s of each layer alone on the same random commands (CPU time).
+
+    The layers run in turn, ``repeats`` rounds of them all, and each layer's
+    median round is taken: a busy machine's drift hits every layer alike.
+    """
+    env = ConeTrackEnv(track="autocross", terminate_off_track=False, **kwargs)
     rng = np.random.default_rng(0)
     actions = [rng.uniform(-0.3, 1.0, 2).astype(np.float32) for _ in range(STEPS)]
-    t0 = time.process_time()
-    for action in actions:
-        env.step(action)
-    total = time.process_time() - t0
-    substeps = env.config.substeps
     commands = [env.action_to_command(a) for a in actions]
-    # The bare physics of as many steps with the same commands (car and cones,
-    # no sensors, no race control), then whole World steps (physics, race
-    # control, sensors).
-    env.reset(seed=0)
-    world = env.loop.world
-    vehicle, space, dt = world.vehicle, world.space, world.dt
-    t0 = time.process_time()
-    for steer, accel in commands:
-        vehicle.set_command(steer, accel)
-        for _ in range(substeps):
-            vehicle.pre_step(dt)
-            space.step(dt)
-            vehicle.post_step()
-    physics = time.process_time() - t0
-    env.reset(seed=0)
-    world = env.loop.world
-    t0 = time.process_time()
-    for steer, accel in commands:
-        world.set_command(steer, accel)
-        for _ in range(substeps):
-            world.step()
-    world_time = time.process_time() - t0
-    return STEPS / total, physics / total, world_time / total
+    substeps = env.config.substeps
+
+    def run_env() -> None:
+        # The loop's share is timed inside the env's run: a replay of its own
+        # drifts with the machine as much as the share it would measure.
+        loop_step = env.loop.step
+        inner = 0.0
+
+        def timed(command: ControlCommand | None = None) -> StepRecord:
+            nonlocal inner
+            t0 = time.process_time()
+            try:
+                return loop_step(command)
+            finally:
+                inner += time.process_time() - t0
+
+        env.loop.step = timed  # type: ignore[method-assign]
+        try:
+            for action in actions:
+                env.step(action)
+        finally:
+            del env.loop.step
+        spent["loop"].append(inner)
+
+    def run_world() -> None:
+        world = env.loop.world
+        for steer, accel in commands:
+            world.set_command(steer, accel)
+            for _ in range(substeps):
+                world.step()
+
+    def run_physics() -> None:
+        world = env.loop.world
+        vehicle, space, h = world.vehicle, world.space, world.dt
+        for steer, accel in commands:
+            vehicle.set_command(steer, accel)
+            for _ in range(substeps):
+                vehicle.pre_step(h)
+                space.step(h)
+                vehicle.post_step()
+        # pymunk alone, as often, on the space the car's drive left behind
+        t0 = time.process_time()
+        for _ in range(STEPS * substeps):
+            space.step(h)
+        spent["pymunk"].append(time.process_time() - t0)
+
+    spent: dict[str, list[float]] = {name: [] for name in LAYERS}
+    for _ in range(repeats):
+        layers = (("env", run_env), ("World.step", run_world), ("car + pymunk", run_physics))
+        for name, run in layers:
+            env.reset(seed=0)
+            t0 = time.process_time()
+            run()
+            took = time.process_time() - t0
+            # run_physics timed pymunk alone after the car: that part is not the car's
+            spent[name].append(took - (spent["pymunk"][-1] if name == "car + pymunk" else 0.0))
+    return {name: STEPS / float(np.median(times)) for name, times in spent.items()}
+
+
+def speed_by_layer() -> None:
+    """Section 1: env steps/s and the share of each layer."""
+    print(f"env steps/s with a random policy, autocross, {STEPS} steps at 50 Hz")
+    print("  (each layer alone on the same commands; us per env step below it)")
+    for label, kwargs in CONFIGS:
+        rates = layer_rates(**kwargs)
+        cost = [1e6 / rates[name] for name in LAYERS]
+        shares = [a - b for a, b in zip(cost, [*cost[1:], 0.0], strict=True)]
+        print(f"  {label}: {rates['env']:,.0f} steps/s")
+        print("    " + ", ".join(f"{name} {rates[name]:,.0f}/s" for name in LAYERS[1:]))
+        names = ("env layer", "localization + loop", "sensors + race control", "car model",
+                 "pymunk")  # fmt: skip
+        print(
+            f"    per env step {cost[0]:.0f} us: "
+            + ", ".join(
+                f"{n} {c:.0f} ({100 * c / cost[0]:.0f} %)"
+                for n, c in zip(names, shares, strict=True)
+            )
+        )
 
 
 def main() -> None:
     """Print the figures."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sections", default="1,2,3,4", help="comma-separated: 1, 2, 3, 4")
-    parser.add_argument("--localization", default="fused", choices=("fused", "raw", "truth"))
+    parser.add_argument("--sections", default="0,1,2,3,4,5", help="comma-separated: 0 to 5")
     args = parser.parse_args()
     sections = {s.strip() for s in args.sections.split(",")}
+    if "0" in sections:
+        print(f"reference, bare pymunk (one box, no contacts): {pymunk_reference():,.0f} steps/s")
     if "1" in sections:
-        print(f"env steps/s with a random policy, autocross, {STEPS} steps of 4 physics substeps")
-        for sensors in ("ideal", "rtk"):
-            rate, phys, world = env_rate(sensors, args.localization)
-            print(
-                f"  {sensors:5s} sensors, {args.localization}: {rate:7.0f} steps/s; bare physics "
-                f"{100 * phys:4.1f} % of the time (env / physics = {1 / phys:4.1f}x), "
-                f"World.step incl. sensors {100 * world:4.1f} %"
-            )
+        speed_by_layer()
+    if "0" in sections:
+        print(f"reference again, bare pymunk: {pymunk_reference():,.0f} steps/s")
     if "2" in sections:
         closed_loop()
     if "3" in sections:
         lap_ratios()
     if "4" in sections:
         filterpy_floor()
+    if "5" in sections:
+        vector_scaling()
+
+
+def _cpu_seconds(pid: int) -> float:
+    """A live process's user + system CPU time [s] (Linux ``/proc``)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def vector_scaling(steps: int = 1000) -> None:
+    """Section 5: one env against two async workers, wall clock and CPU time.
+
+    The CPU time of the workers (from ``/proc``, over the timed steps only)
+    and of the main process per env step, against one env's, says what the
+    vector env costs beside the env itself, whatever the load; the wall
+    clock's ratio is the scaling only on idle cores.
+    """
+    print(f"vector envs, default configuration, {steps} steps per env:")
+    rng = np.random.default_rng(0)
+    actions = rng.uniform(-0.3, 1.0, (steps, 2, 2)).astype(np.float32)
+    env = gym.make(ENV_ID, track="autocross", terminate_off_track=False)
+    env.reset(seed=0)
+    t0, c0 = time.perf_counter(), time.process_time()
+    for k in range(steps):
+        _, _, terminated, truncated, _ = env.step(actions[k, 0])
+        if terminated or truncated:
+            env.reset()
+    one, one_cpu = steps / (time.perf_counter() - t0), (time.process_time() - c0) / steps
+    env.close()
+    vec = gym.make_vec(
+        ENV_ID, num_envs=2, vectorization_mode="async", track="autocross", terminate_off_track=False
+    )
+    vec.reset(seed=0)
+    vec.step(actions[0])  # the workers are up
+    pids = [p.pid for p in vec.unwrapped.processes]  # type: ignore[attr-defined]
+    w0 = sum(_cpu_seconds(pid) for pid in pids)
+    t0, c0 = time.perf_counter(), time.process_time()
+    for k in range(steps):
+        vec.step(actions[k])
+    wall, main_cpu = time.perf_counter() - t0, time.process_time() - c0
+    workers = sum(_cpu_seconds(pid) for pid in pids) - w0
+    vec.close()
+    two = 2 * steps / wall
+    load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
+    worker, main = workers / (2 * steps), main_cpu / steps  # per env step, per vec step
+    # On two idle cores the workers step side by side, then the main process
+    # gathers their results while they wait: a vec step takes worker + main.
+    idle = 2.0 * one_cpu / (worker + main)
+    print(
+        f"  wall clock: 1 env {one:,.0f} steps/s; 2 async workers {two:,.0f} steps/s:"
+        f" {two / one:.2f}x (load average {load} on {os.cpu_count()} cores)"
+        f"\n  CPU: 1 env {1e6 * one_cpu:.0f} us per step; 2 async workers"
+        f" {1e6 * worker:.0f} us per env step each, the main process {1e6 * main:.0f} us"
+        f" per vec step: on 2 idle cores 2 x {1e6 * one_cpu:.0f} /"
+        f" ({1e6 * worker:.0f} + {1e6 * main:.0f}) = {idle:.2f}x"
+    )
 
 
 def closed_loop() -> None:
@@ -142,11 +268,12 @@ def filterpy_floor() -> None:
     """
     targets = [(ExtendedKalmanFilter, "predict"), (ExtendedKalmanFilter, "update")]
     with timed_calls(targets, time.process_time) as tally:
-        rate, phys, _ = env_rate("rtk", "fused")
+        rates = layer_rates()
+    rate = rates["env"]
     calls = tally["predict"] + tally["update"]
     per_step = tally["time"] / STEPS  # [s] filterpy per env step
     per_call = tally["time"] / calls
-    physics_per_step = phys / rate  # [s] bare physics per env step
+    physics_per_step = 1.0 / rates["car + pymunk"]  # [s] bare physics per env step
     env = ConeTrackEnv(track="autocross")
     control_rate = env.config.control_rate
     profile = env.loop.world_config.sensor_profile

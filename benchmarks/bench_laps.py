@@ -27,9 +27,8 @@ def one_run(job: tuple[str, int, str]) -> tuple[str, int, bool, str, int, int, f
     """(track, seed, clean, end reason, DOO cones, off-track events, lap ratio) of one run."""
     track, seed, localization = job
     r = run_scenario(track, laps=2, seed=seed, localization=localization)
-    clean = r.finished and r.cones_down_or_out == 0 and r.off_track_events == 0
     return (
-        track, seed, clean, r.end_reason, r.cones_down_or_out, r.off_track_events,
+        track, seed, r.clean, r.end_reason, r.cones_down_or_out, r.off_track_events,
         r.lap_time_ratio,
     )  # fmt: skip
 

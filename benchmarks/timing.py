@@ -1,11 +1,12 @@
-"""Time a library's own calls inside a run: shared by the benchmarks.
+"""Time a library's own calls inside a run, and the machine's speed: shared by the benchmarks.
 
 ``timed_calls`` swaps attributes (methods of a class, functions a module
 imported) for wrappers that add each call's time to a tally, and puts the
 originals back on exit. The benchmarks use it to show the floor that a
 library the design card names sets (filterpy's EKF in ``bench_env``,
 scipy's Delaunay and splprep in ``bench_planner``), measured in the real
-run, on its real data, with its real cache state.
+run, on its real data, with its real cache state. ``pymunk_reference`` is
+the machine's speed, measured beside a figure (``write_results``, ``bench_env``).
 """
 
 from __future__ import annotations
@@ -14,6 +15,8 @@ import time
 from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from typing import Any
+
+import pymunk
 
 
 @contextmanager
@@ -51,3 +54,22 @@ def timed_calls(
     finally:
         for owner, name, function in originals:
             setattr(owner, name, function)
+
+
+REFERENCE_STEPS = 50_000
+
+
+def pymunk_reference() -> float:
+    """Bare pymunk steps per second: one 1 kg box, 200 Hz steps, no contacts.
+
+    The machine's speed at the moment, measured beside a figure so that it
+    can be read against it (this machine's speed drifts about 2x).
+    """
+    space = pymunk.Space()
+    body = pymunk.Body(1.0, pymunk.moment_for_box(1.0, (1.0, 1.0)))
+    body.velocity = (1.0, 0.0)
+    space.add(body, pymunk.Poly.create_box(body, (1.0, 1.0)))
+    t0 = time.process_time()
+    for _ in range(REFERENCE_STEPS):
+        space.step(0.005)
+    return REFERENCE_STEPS / (time.process_time() - t0)

@@ -22,26 +22,14 @@ import os
 import platform
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pymunk
 
+from timing import pymunk_reference
+
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "RESULTS.md"
-REFERENCE_STEPS = 50_000
-
-
-def pymunk_reference() -> float:
-    """Bare pymunk steps per second: one 1 kg box, 200 Hz steps, no contacts."""
-    space = pymunk.Space()
-    body = pymunk.Body(1.0, pymunk.moment_for_box(1.0, (1.0, 1.0)))
-    body.velocity = (1.0, 0.0)
-    space.add(body, pymunk.Poly.create_box(body, (1.0, 1.0)))
-    t0 = time.process_time()
-    for _ in range(REFERENCE_STEPS):
-        space.step(0.005)
-    return REFERENCE_STEPS / (time.process_time() - t0)
 
 
 def machine() -> str:

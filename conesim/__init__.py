@@ -25,7 +25,7 @@ __version__ = "0.1.0"
 
 ENV_ID = "conesim/ConeTrack-v0"
 # A backstop only: the env ends its episodes itself at its ``time_limit`` (with
-# ``info["end_reason"] == "time_limit"``). 10 million steps is 2.3 simulated
+# ``info["end_reason"]`` naming ``time_limit``). 10 million steps is 2.3 simulated
 # days at 50 Hz: far behind the time limit of any lap count a user would set.
 DEFAULT_MAX_EPISODE_STEPS = 10_000_000
 

@@ -6,6 +6,8 @@ Subcommands:
 * ``conesim track show NAME|PATH --out FILE.png``: a picture of the cones by kind
   and the global path coloured by covariance status.
 * ``conesim track check NAME|PATH [--json]``: the Formula Student validator.
+* ``conesim track generate --seed S --out FILE [--size ...]``: a random
+  FS-rule track (``tracks.generate``), written in the conesim format.
 * ``conesim run [SCENARIO.yaml] [--set KEY=VALUE ...] [flags]``: one
   headless closed-loop scenario (``envs.runner``): a results table,
   ``DIR/result.json`` and ``DIR/run.png``; with ``--bag BAG`` also a ROS 2
@@ -17,6 +19,8 @@ Subcommands:
   (``envs.run_dir``).
 * ``conesim scenario show [SCENARIO.yaml] [--set ...] [flags]``: the scenario
   ``run`` would run, as YAML with every default filled in.
+* ``conesim sweep SWEEP.yaml --out DIR [--workers N] [--ray [ADDRESS]]`` and
+  ``conesim sweep summary DIR``: many runs (``envs.cli_sweep``).
 
 ``-v`` (log the nodes' warnings) goes before or after the subcommand.
 
@@ -37,9 +41,9 @@ import logging
 import math
 import os
 import sys
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, TextIO
+from typing import TYPE_CHECKING
 
 from gymnasium.error import DependencyNotInstalled
 
@@ -47,7 +51,8 @@ from conesim.core.geodesy import GeodesyError
 from conesim.envs.cli_parser import CliError, build_parser
 from conesim.envs.dataclass_io import FieldError
 from conesim.envs.paths import missing_dirs, nearest_existing, os_reason
-from conesim.envs.run_dir import OUTPUT_FILES, RunDirError, check_run_dir
+from conesim.envs.progress import ProgressBar
+from conesim.envs.run_dir import RunDirError, check_run_dir, write_together
 from conesim.envs.run_plot import save_run_picture
 from conesim.envs.track_plot import save_track_picture
 from conesim.envs.yaml_io import parse_value
@@ -55,9 +60,14 @@ from conesim.tracks import (
     DEFAULT_TRACK,
     Track,
     TrackFormatError,
+    TrackSource,
+    TrackSpec,
     check_report,
+    generate_track,
     load_track,
     shipped_tracks,
+    track_label,
+    write_track,
 )
 from conesim.tracks.global_path import (
     GlobalPath,
@@ -96,9 +106,9 @@ def cmd_tracks() -> int:
     return EXIT_OK
 
 
-def _load_track(name: str, option: str) -> Track:
+def _load_track(name: TrackSource, option: str) -> Track:
     """``load_track`` that refuses an empty name (which would read the current directory)."""
-    if not name.strip():
+    if not track_label(name).strip():
         raise CliError(f"{option}: empty track name; give a shipped track name or a track file")
     return load_track(name)
 
@@ -150,6 +160,53 @@ def cmd_track_check(name: str, as_json: bool) -> int:
             print(f"error: {error}")
         if not report["warnings"] and not report["errors"]:
             print("ok: no warnings, no errors")
+    return EXIT_FAILED if report["errors"] else EXIT_OK
+
+
+GENERATE_FLAGS = {
+    "size": "size",
+    "length": "length",
+    "width": "width",
+    "hairpins": "hairpins",
+    "tight_share": "tight_share",
+    "min_radius": "min_radius",
+    "gate_offset": "gate_offset",
+}
+"""``track generate``'s flags and the ``TrackSpec`` field each sets."""
+
+
+def cmd_track_generate(args: argparse.Namespace) -> int:
+    """Generate a track, write it, and print what it is and what ``track check`` finds."""
+    out = args.out
+    if not out.strip():
+        raise CliError("--out: empty file name; give a .yaml file name")
+    target = Path(out)
+    if target.is_dir():
+        raise CliError(f"--out {out}: is a directory; give a .yaml file name")
+    if not 0 <= args.seed < 2**63:
+        raise CliError(f"--seed {args.seed}: must be a non-negative integer below 2**63")
+    given = {field: getattr(args, flag) for flag, field in GENERATE_FLAGS.items()}
+    try:
+        spec = TrackSpec(**{k: v for k, v in given.items() if v is not None})
+    except ValueError as exc:
+        named = [f for f, field in GENERATE_FLAGS.items() if f"TrackSpec.{field} " in str(exc)]
+        flag = f"--{named[0].replace('_', '-')}: " if named else ""
+        raise CliError(f"{flag}{exc}") from None
+    track = generate_track(args.seed, spec)
+    try:
+        written = write_track(track, target)
+    except OSError as exc:
+        raise CliError(f"--out {out}: cannot write the track ({os_reason(exc)})") from None
+    report = check_report(track)
+    print(
+        f"wrote {written}: {track.name}, {report['length_m']:.1f} m, width "
+        f"{report['width_min_m']:.2f}-{report['width_max_m']:.2f} m, {len(track.cones)} cones"
+    )
+    print(track.description)
+    for warning in report["warnings"]:
+        print(f"warning: {warning}")
+    for error in report["errors"]:
+        print(f"error: {error}")
     return EXIT_FAILED if report["errors"] else EXIT_OK
 
 
@@ -237,7 +294,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     global_path = global_path_for_track(track)
     errors = check_report(track)["errors"]
     if errors:
-        raise CliError("\n".join(f"{scenario.track}: {error}" for error in errors))
+        raise CliError("\n".join(f"{scenario.track_name}: {error}" for error in errors))
     out = Path(args.out)
     try:
         check_run_dir(
@@ -313,50 +370,17 @@ def _check_render_extra() -> None:
 def _write_outputs(
     out: Path, payload: str, result: RunResult, track: Track, global_path: GlobalPath
 ) -> None:
-    """Write run.png and result.json into ``out``: both, or nothing.
-
-    Both go to temporary names first and are moved into place only when both
-    were written. A previous run's pair is first moved aside and put back if
-    a move fails, so ``out`` holds the new pair or the old one, never one of
-    each; directories this call created are removed on any failure. One run
-    per output directory at a time: two runs writing the same ``out`` at
-    once may still interleave their moves.
-    """
-    created = missing_dirs(out)
-    tag = f"{os.getpid()}.tmp"
-    tmp = {name: out / f".{name}.{tag}" for name in OUTPUT_FILES}
-    old = {name: out / f".{name}.old.{tag}" for name in OUTPUT_FILES}
-    aside: list[str] = []
-    moved: list[Path] = []
+    """Write run.png and result.json into ``out``: both, or nothing (``write_together``)."""
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        save_run_picture(result, track, global_path, tmp["run.png"])
-        tmp["result.json"].write_text(payload + "\n", encoding="utf-8")
-        for name in OUTPUT_FILES:
-            if (out / name).exists():
-                os.replace(out / name, old[name])
-                aside.append(name)
-        for name in OUTPUT_FILES:
-            os.replace(tmp[name], out / name)
-            moved.append(out / name)
+        write_together(
+            out,
+            {
+                "run.png": lambda path: save_run_picture(result, track, global_path, path),
+                "result.json": lambda path: path.write_text(payload + "\n", encoding="utf-8"),
+            },
+        )
     except OSError as exc:
-        for path in moved:
-            path.unlink(missing_ok=True)
-        for name in aside:
-            with contextlib.suppress(OSError):
-                os.replace(old[name], out / name)
-        _remove_temporaries(tmp.values())
-        for directory in reversed(created):
-            with contextlib.suppress(OSError):
-                directory.rmdir()
         raise CliError(f"--out {out}: cannot write the results ({os_reason(exc)})") from None
-    _remove_temporaries([*tmp.values(), *old.values()])
-
-
-def _remove_temporaries(paths: Iterable[Path]) -> None:
-    for path in paths:
-        with contextlib.suppress(OSError):
-            path.unlink(missing_ok=True)
 
 
 def format_result(
@@ -405,29 +429,6 @@ def format_result(
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
 
 
-class ProgressBar:
-    """A one-line progress bar on a terminal (simulated time against the limit)."""
-
-    def __init__(self, stream: TextIO, width: int = 30) -> None:
-        self.stream = stream
-        self.width = width
-        self._shown = -1
-
-    def update(self, t: float, limit: float) -> None:
-        """Redraw when the bar moves."""
-        filled = min(self.width, int(self.width * t / limit)) if limit > 0 else 0
-        if filled != self._shown:
-            self._shown = filled
-            bar = "#" * filled + "." * (self.width - filled)
-            self.stream.write(f"\rconesim run [{bar}] {t:6.1f} s simulated")
-            self.stream.flush()
-
-    def close(self) -> None:
-        """End the line."""
-        self.stream.write("\n")
-        self.stream.flush()
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``conesim`` console script."""
     try:
@@ -442,10 +443,16 @@ def main(argv: Sequence[str] | None = None) -> int:
             return cmd_track_show(args.track, args.out)
         if args.command == "track" and args.track_command == "check":
             return cmd_track_check(args.track, args.json)
+        if args.command == "track" and args.track_command == "generate":
+            return cmd_track_generate(args)
         if args.command == "run":
             return cmd_run(args)
         if args.command == "scenario" and args.scenario_command == "show":
             return cmd_scenario_show(args)
+        if args.command == "sweep":
+            from conesim.envs.cli_sweep import cmd_sweep  # noqa: PLC0415 (with the loop)
+
+            return cmd_sweep(args)
     except (*INPUT_ERRORS, CliError) as exc:
         for line in str(exc).splitlines() or [""]:
             print(f"conesim: error: {line}", file=sys.stderr)

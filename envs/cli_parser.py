@@ -10,10 +10,11 @@ heavy: ``conesim tracks`` and ``--help`` stay fast.
 from __future__ import annotations
 
 import argparse
-from typing import NoReturn
+from typing import NoReturn, get_args
 
 from conesim.localization.modes import LOCALIZATION_MODES
 from conesim.sim.sensors import PROFILES as SENSOR_PROFILES
+from conesim.tracks.generate.spec import Size
 
 VERBOSE_HELP = "log the nodes' warnings (rejected messages)"
 
@@ -86,6 +87,41 @@ def build_parser() -> argparse.ArgumentParser:
     )
     check.add_argument("track", help="shipped track name or a track file")
     check.add_argument("--json", action="store_true", help="print one JSON object")
+    generate = track_sub.add_parser(
+        "generate",
+        parents=[verbose],
+        help="generate a random FS-rule track and write it as a conesim track file",
+        description="Generate a random closed FS-rule track (the same seed and settings "
+        "give the same cones, always) and write it in the conesim format.",
+    )
+    generate.add_argument("--seed", type=int, required=True, help="the generator's seed")
+    generate.add_argument("--out", required=True, help="the track file to write (.yaml)")
+    generate.add_argument(
+        "--size", choices=list(get_args(Size)), default="medium",
+        help="lap length 200-280 m (small), 280-380 m (medium, default), 380-500 m (large)",
+    )  # fmt: skip
+    generate.add_argument(
+        "--length", type=float, nargs=2, metavar=("MIN", "MAX"), help="lap length range [m]"
+    )
+    generate.add_argument(
+        "--width", type=float, nargs=2, metavar=("MIN", "MAX"),
+        help="lane width range [m] (default 3.0 3.5; FS: >= 3 m)",
+    )  # fmt: skip
+    generate.add_argument(
+        "--hairpins", type=int, nargs=2, metavar=("MIN", "MAX"), help="how many hairpins"
+    )
+    generate.add_argument(
+        "--tight-share", type=float,
+        help="share of hairpins tighter than 4.5 m lane-centre radius, down to --min-radius "
+        "(default 0.25)",
+    )  # fmt: skip
+    generate.add_argument(
+        "--min-radius", type=float, help="tightest lane-centre radius [m] (default 3.0)"
+    )
+    generate.add_argument(
+        "--gate-offset", type=float, nargs=2, metavar=("MIN", "MAX"),
+        help="how far the big orange gate cones stand outside the lane [m] (default 0.5 1.2)",
+    )  # fmt: skip
 
     run = sub.add_parser(
         "run",
@@ -108,6 +144,18 @@ def build_parser() -> argparse.ArgumentParser:
         "(ros extra)",
     )
 
+    _sweep_options(
+        sub.add_parser(
+            "sweep",
+            parents=[verbose],
+            help="run many scenarios: a base scenario and the axes to vary",
+            description="Run a sweep: a base scenario and the axes to vary (their product, or\n"
+            "a list of points), every run checked before the first starts (README: Sweeps).",
+            epilog=SWEEP_EPILOG,
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
+    )
+
     scenario = sub.add_parser(
         "scenario", parents=[verbose], help="inspect a scenario (the settings of a run)"
     )
@@ -121,3 +169,48 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _scenario_options(show_scenario)
     return parser
+
+
+SWEEP_EPILOG = """\
+conesim sweep summary DIR writes DIR's summary.md, summary.png and failed.md
+again from its results.jsonl (and prints the tables).
+
+Outputs in DIR: results.jsonl (a row per run, written as each finishes),
+runs/<run-id>/result.json and run.png (or error.txt), sweep.json, and at the
+end summary.md, summary.png and failed.md. The same command again resumes an
+interrupted sweep, skipping the runs done. Exit status: 0 every run clean,
+1 some run not clean or an error, 2 bad input, 130 interrupted (Ctrl-C)."""
+
+
+def _sweep_options(sweep: argparse.ArgumentParser) -> None:
+    """``conesim sweep SWEEP.yaml --out DIR`` and ``conesim sweep summary DIR``."""
+    sweep.add_argument(
+        "sweep", metavar="SWEEP.yaml", help="the sweep file (or 'summary', then DIR)"
+    )
+    sweep.add_argument(
+        "dir", nargs="?", metavar="DIR", help="with 'summary': the sweep's directory"
+    )
+    sweep.add_argument(
+        "--out", metavar="DIR", help="output directory: new, empty, or this sweep's (resumes it)"
+    )
+    sweep.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help="runs at once (default every core; 1 runs them in this process); "
+        "with --ray the local Ray's CPUs",
+    )
+    sweep.add_argument(
+        "--ray",
+        nargs="?",
+        const="local",
+        metavar="ADDRESS",
+        help="run on Ray: a local Ray started for the sweep, or the cluster at ADDRESS (ray extra)",
+    )
+    sweep.add_argument(
+        "--pictures",
+        choices=("all", "failed", "none"),
+        default="all",
+        help="which runs get a run.png: all (default), failed (not clean) or none; drawing "
+        "one takes longer than a short run",
+    )

@@ -8,60 +8,116 @@ of the episode. To drive it with the autopilot (a baseline, or an expert for
 imitation learning) use ``envs.expert.AutopilotExpert``.
 
 ## Action Space
-``Box(-1, 1, (2,), float32)``: ``[steering, acceleration]``. Steering maps
-linearly to the front wheel angle within +-``max_steer`` (0.47 rad by
-default); acceleration maps to ``a * max_accel`` for ``a >= 0`` (3 m/s^2) and
-``a * max_decel`` below 0 (10 m/s^2). The steering actuator has a rate limit
-and a lag (``sim.vehicle_params``).
+``action="centred"`` (default): ``Box(-1, 1, (2,), float32)``,
+``[steering, acceleration]``, both symmetric about zero: steering
+``a0 * max_steer`` (0.47 rad), acceleration ``a1 * max_accel`` (+-3 m/s^2).
+A zero action is no steering and no acceleration, and zero-mean random
+actions accelerate the car by zero on average (so an untrained policy
+moves: the car has no reverse gear, so its speed performs a random walk
+held at zero from below). Braking is limited to ``max_accel`` in this mode: the
+autopilot, planning its braking within it, loses about 2 % of lap time
+(autocross 25.1 s -> 25.6 s, trackdrive 18.7 s -> 18.9 s).
+
+``action="physical"``: ``Box([-max_steer, -max_decel], [max_steer,
+max_accel])`` in [rad] and [m/s^2]: the car's whole range, full braking
+(10 m/s^2) included; zero is still no command.
+
+The command is held for one control period (``control_rate``, 50 Hz; 4
+physics steps at 200 Hz). The steering actuator has a rate limit and a lag
+(``sim.vehicle_params``). An action outside the space is clipped into it.
 
 ## Observation Space
-See ``envs.observation``: in ``vector`` mode a float32 Box of
-``6 + 3 K`` values (estimated speed and yaw rate, the previous action, the
-EKF's 1-sigma position and heading uncertainty, then the K nearest detected
-cones in ``os_sensor`` as x, y, mask); ``dict`` mode adds colours, the
-estimated pose and its covariance, ``pose_valid`` and ``cones_age`` (seconds
-since the cone detection's stamp).
+``observation="vector"`` (default): float32, ``8 + 5 K`` entries (K =
+``max_cones``, 32), every one scaled to order 1: speed / 20 m/s, yaw rate /
+2 rad/s, the previous command, a pose-validity flag, the EKF's 1-sigma
+position (/ 1 m) and heading (/ 0.1 rad) uncertainty, the cone detection's
+age (/ 1 s), then the K nearest detected cones in ``os_sensor`` as (x / range,
+y / range, mask, side: +1 blue / -1 yellow / 0, orange). ``observation="dict"``:
+the same in raw units with the estimated pose and its covariance. The
+layouts and scales: ``envs.observation``.
 
 ## Rewards
-A sum of named terms, each also in ``info["reward_terms"]``: ``progress``
-(metres of net progress along the true centreline), ``time`` (per second),
-``cone_hit`` (per cone touched), ``cone_doo`` (per cone down or out; FS
-charges 2 s), ``off_track`` (per excursion; FS charges 10 s), ``lap`` (per
-lap). Weights: ``envs.config.RewardWeights``.
+A sum of named terms, each in ``info["reward_terms"]`` (weights:
+``rewards={...}``, ``envs.config.RewardWeights``): ``progress`` (+1 per metre
+of net progress along the true centreline; a cut across the infield never
+pays), ``time`` (-1 per second), ``cone_doo`` (-2 per cone down or out),
+``off_track`` (-10 per excursion), ``cone_hit`` (0 per cone touched) and
+``lap`` (0 per lap).
+
+The time weight is the exchange rate between time and progress, 1 m per
+second, and the penalties are the Formula Student charges at that rate (2 s
+per cone down or out, 10 s per off-course). So a completed lap of length L
+returns ``L - (lap time + FS penalties)``: the return orders laps as FS
+scores them, faster and cleaner always paying more. On trackdrive (270 m): a
+clean lap at 5 m/s returns 270 - 54 = 216, at 10 m/s 243, at 10 m/s with a
+cone down 241, the same as a clean lap 2 s slower. Progress dominates: every
+second of driving faster than 1 m/s pays, so a crawl earns more than
+standing still (-1 per second, -15 before the stuck rule ends it), and an
+episode that ends early (off the track, stuck) forfeits the progress still
+to come: leaving the track costs the 10 s penalty plus the rest of the lap.
 
 ## Starting State
 The car stands still at the track's start pose (behind the start line), at
-t = 0, sensors and filter freshly reset with the episode seed.
+t = 0, sensors and filter freshly reset with the episode seed. With
+``track="random"`` each episode's track is generated (``tracks.generate``,
+``track_spec``: medium, 280-380 m, by default) from a seed drawn from
+``track_seeds`` (default ``range(1000)``; a ``range`` or a pair ``(lo, hi)``)
+with the episode's generator, so ``reset(seed=s)`` always gives the same
+track; ``info["track_seed"]`` names it. Train on ``track_seeds=(0, 1000)``
+and test on ``(1000, 1100)``: a policy then meets tracks it never saw.
 
 ## Episode End
 Terminated when the requested laps are complete (an open lane such as
-acceleration is one run, whatever ``laps`` says), when the car leaves the
-track (``terminate_off_track``) or is stuck (``terminate_stuck``); truncated
-at the time limit (``time_limit``; default 60 s per lap + 30 s).
-``info["end_reason"]`` says which (``envs.loop.EndReason``). The registered
-``max_episode_steps`` is a backstop behind the env's own limit.
+acceleration is one run, whatever ``laps`` says); when the car leaves the
+track (``terminate_off_track``, default True; without it each excursion
+costs its penalty and the episode goes on); when it is stuck
+(``terminate_stuck``, default True): less than ``stuck_progress`` (1 m) of
+net progress in the last ``stuck_time`` (10 s), and never before
+``stuck_grace`` (15 s), so a car is never stuck before it had a chance to
+move. Truncated at ``time_limit`` (default 60 s per lap + 30 s).
+``info["end_reason"]`` says which, as an index into ``END_REASONS``. The
+registered ``max_episode_steps`` is a backstop behind the env's own limit.
+
+## Info
+``info="lean"`` (default), numbers only so that vector envs stack them into
+numeric arrays: ``t`` [s], ``progress_m``, ``speed`` (true, [m/s]),
+``laps_completed``, ``lap_time`` (the last lap's [s], 0 before one),
+``cones_hit``, ``cones_down_or_out``, ``off_track_events``, ``end_reason``
+(0 while running, ``END_REASONS``), ``track_seed`` (the generated track's
+seed, -1 for another track) and ``reward_terms``. ``info="full"``
+adds ``lap_times``, ``truth`` (the antenna's pose, speed, steering),
+``localization_error`` and ``messages`` (every measurement delivered in the
+step).
 
 ## Arguments
-``gymnasium.make("conesim:conesim/ConeTrack-v0", track="autocross", sensors="rtk",
+``gymnasium.make("conesim:conesim/ConeTrack-v0", track="autocross" (or "random",
+with track_seeds=(0, 1000) and track_spec={"size": "small"}), sensors="rtk",
 localization="fused", laps=1, control_rate=50, observation="vector",
+action="centred", info="lean", stuck_time=10, stuck_progress=1,
+stuck_grace=15, terminate_off_track=True, time_limit=None,
 render_mode="rgb_array", ...)``; every ``envs.config.EnvConfig`` field, or
 ``scenario=`` (a ``Scenario`` or a scenario file) with the keywords given
 beside it changing its parts; ``sensors`` may be a ``SensorProfile``, and
-``faults``, ``ekf`` and ``vehicle`` objects or mappings. Unknown keys raise,
-listing the allowed ones. ``reset(options=...)`` takes ``track``,
-``sensors`` (a name or a profile), ``localization`` and ``start_pose``
-((x, y, yaw) of the CG) for that episode only.
+``faults``, ``ekf`` and ``vehicle`` objects or mappings; ``track`` may be a
+generated track (a ``GeneratedTrack``, or ``{"generate": {"seed": S, ...}}``
+as in a scenario file). Unknown keys and values out of range raise, naming
+them. ``reset(options=...)`` takes ``track``, ``sensors`` (a name or a
+profile), ``localization`` and ``start_pose`` ((x, y, yaw) of the CG) for
+that episode only.
 
 ## Version History
 * v0: first release (conesim 0.1.0, unreleased: its dict observation grew
-  ``pose_valid`` and ``cones_age`` before any release; a change after one
-  gets a new version).
+  ``pose_valid`` and ``cones_age``; then the centred action, the normalised
+  vector observation, the lean info, the FS-rate reward and the stuck
+  rule's grace and the random tracks came, all before any release; a change
+  after one gets a new version).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
@@ -70,19 +126,24 @@ from numpy.typing import NDArray
 
 from conesim.core.geodesy import GeodesyError
 from conesim.core.pose import Pose2D
-from conesim.envs.config import EnvConfig
-from conesim.envs.loop import Broadcast, ClosedLoop, StepRecord, world_seed
-from conesim.envs.observation import SensorMemory, build_observation, observation_space
+from conesim.envs.config import RANDOM_TRACK, EnvConfig
+from conesim.envs.loop import Broadcast, ClosedLoop, EndReason, StepRecord, world_seed
+from conesim.envs.observation import SensorMemory, build_dict, build_vector, observation_space
 from conesim.envs.render import Renderer, Scene, SceneKeeper
 from conesim.envs.scenario import Localization
 from conesim.planner.messages import ControlCommand
 from conesim.sim.events import RaceStanding
 from conesim.sim.sensors import SensorProfile, get_profile
-from conesim.tracks import Track, load_track
+from conesim.tracks import GeneratedTrack, Track, TrackGenerationError, TrackSource, load_track
 
 ObsType = NDArray[np.float32] | dict[str, NDArray[np.float32]]
 RESET_OPTIONS = ("track", "sensors", "localization", "start_pose")
 REWARD_TERMS = ("progress", "time", "cone_hit", "cone_doo", "off_track", "lap")
+END_REASONS = ("", *(str(r) for r in EndReason))
+"""``info["end_reason"]`` indexes this: 0 while the episode runs, then its ``EndReason``."""
+_END_CODES = {r: k for k, r in enumerate(EndReason, start=1)}
+TRACK_CACHE_SIZE = 64  # tracks kept loaded (generated ones take ~0.1 s to make)
+GENERATION_TRIES = 10  # seeds tried in turn when the generator gives one up
 
 
 class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
@@ -92,6 +153,8 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         loop: the closed loop of the current episode (public: its ``record``,
             ``localizer.frames`` and ``global_path`` serve a driver such as
             ``AutopilotExpert``).
+        track_seed: the current episode's generated track's seed, -1 when
+            the track is not generated.
     """
 
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 20}  # noqa: RUF012
@@ -105,15 +168,32 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         self.render_mode = render_mode
         # One frame per action: the recorded or shown video runs in real time.
         self.metadata = {**self.metadata, "render_fps": round(self.config.control_rate)}
-        self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
-        self.observation_space = observation_space(self.config.max_cones, self.config.observation)
-        self._track_cache: dict[str, Track] = {}
         cfg = self.config
-        self.loop = self._build_loop(cfg.track, cfg.sensors, cfg.localization)
+        self._track_cache: dict[TrackSource, Track] = {}
+        first = self._generated(0) if cfg.track == RANDOM_TRACK else cfg.track
+        self.track_seed = _generator_seed(first)
+        self.loop = self._build_loop(first, cfg.sensors, cfg.localization)
+        p = self.loop.world_config.vehicle
+        if cfg.action == "centred":
+            self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
+            self._scale = (p.max_steer, p.max_accel)  # command per unit of action
+        else:
+            self.action_space = gym.spaces.Box(
+                np.array([-p.max_steer, -p.max_decel], dtype=np.float32),
+                np.array([p.max_steer, p.max_accel], dtype=np.float32),
+                dtype=np.float32,
+            )
+            self._scale = (1.0, 1.0)
+        # The observation's command: steering / max_steer, acceleration / the
+        # action's acceleration scale (the centred action reads back as itself).
+        self._obs_scale = (p.max_steer, p.max_accel if cfg.action == "centred" else p.max_decel)
+        self._low = [float(v) for v in self.action_space.low]
+        self._high = [float(v) for v in self.action_space.high]
+        self.observation_space = observation_space(cfg.max_cones, cfg.observation)
         self._record: StepRecord | None = None  # the last step's; None before reset
         self._renderer: Renderer | None = None
         self._scenes = self._scene_keeper()
-        self._action = np.zeros(2, dtype=np.float32)
+        self._command = (0.0, 0.0)  # the last command over the observation's scales
         self._memory = SensorMemory()
         self._broadcast: Broadcast | None = None
 
@@ -144,7 +224,10 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         rng_state = None if rng is None else rng.bit_generator.state
         super().reset(seed=seed)
         try:
-            loop = self._build_loop(chosen.track, chosen.sensors, chosen.localization)
+            track = chosen.track
+            if track == RANDOM_TRACK:
+                track = self._generated(int(self.np_random.integers(len(cfg.track_seeds))))
+            loop = self._build_loop(track, chosen.sensors, chosen.localization)
             record = loop.reset(world_seed(self.np_random), start_pose)
             if start_pose is not None and loop.world.race.is_off_track_at(start_pose):
                 raise ValueError(
@@ -160,7 +243,8 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
                 raise ValueError(f"reset option start_pose {pose!r}: {exc}") from None
             raise
         self.loop = loop
-        self._action = np.zeros(2, dtype=np.float32)
+        self.track_seed = _generator_seed(track)
+        self._command = (0.0, 0.0)
         self._memory = SensorMemory()
         self._broadcast = None
         self._scenes = self._scene_keeper()
@@ -179,16 +263,9 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         last = self._record
         if last is None:
             raise gym.error.ResetNeeded("call reset() before step()")
-        act = np.asarray(action, dtype=np.float32)
-        if act.shape != (2,):
-            raise ValueError(
-                f"action must have shape (2,) (steering, acceleration), got shape {act.shape}"
-            )
-        a0, a1 = act.tolist()
-        if not (math.isfinite(a0) and math.isfinite(a1)):
-            raise ValueError(f"action must be finite, got {action!r}")
-        self._action = np.minimum(np.maximum(act, -1.0), 1.0)  # np.clip without its wrapper
-        steer, accel = self.action_to_command(self._action)
+        steer, accel = self.action_to_command(action)
+        os_, oa = self._obs_scale
+        self._command = (steer / os_, accel / oa)
         # 2. simulate: the closed loop, with the action as its command
         record = self.loop.step(ControlCommand(last.t, steer, accel))
         self._take(record)
@@ -227,34 +304,70 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
 
     # -- pieces ------------------------------------------------------------------------------
 
-    def action_to_command(self, action: NDArray[np.float32]) -> tuple[float, float]:
-        """Map an action in [-1, 1]^2 to (steering [rad], acceleration [m/s^2])."""
-        p = self.loop.world_config.vehicle
-        a = float(action[1])
-        return float(action[0]) * p.max_steer, a * (p.max_accel if a >= 0 else p.max_decel)
+    def action_to_command(self, action: Any) -> tuple[float, float]:
+        """(steering [rad], acceleration [m/s^2]) of an action, clipped into the action space.
+
+        Raises:
+            ValueError: the action is not two finite numbers.
+        """
+        values = np.asarray(action, dtype=np.float32)
+        if values.shape != (2,):
+            raise ValueError(
+                f"action must have shape (2,) (steering, acceleration), got shape {values.shape}"
+            )
+        a0, a1 = values.tolist()
+        if not (math.isfinite(a0) and math.isfinite(a1)):
+            raise ValueError(f"action must be finite, got {action!r}")
+        low, high = self._low, self._high
+        a0 = min(max(a0, low[0]), high[0])
+        a1 = min(max(a1, low[1]), high[1])
+        return a0 * self._scale[0], a1 * self._scale[1]
 
     def command_to_action(self, steer: float, accel: float) -> NDArray[np.float32]:
         """Inverse of :meth:`action_to_command`, clipped to the action space."""
-        p = self.loop.world_config.vehicle
-        a = accel / p.max_accel if accel >= 0 else accel / p.max_decel
-        return np.clip(np.array([steer / p.max_steer, a], dtype=np.float32), -1.0, 1.0)
+        action = np.array([steer / self._scale[0], accel / self._scale[1]], dtype=np.float32)
+        return np.clip(action, self._low, self._high).astype(np.float32)
+
+    @property
+    def brake_limit(self) -> float:
+        """The hardest braking an action can command [m/s^2] (positive)."""
+        return -self._low[1] * self._scale[1]
 
     def _build_loop(
-        self, track_name: str, sensors: SensorProfile | str, localization: Localization
+        self, track_name: TrackSource, sensors: SensorProfile | str, localization: Localization
     ) -> ClosedLoop:
         """A loop for one episode: the env's scenario with this track, sensors, localization."""
         scenario = dataclasses.replace(
             self.config.to_scenario(),
-            track=track_name,
+            track=track_name if isinstance(track_name, GeneratedTrack) else os.fspath(track_name),
             sensors=sensors if isinstance(sensors, SensorProfile) else get_profile(sensors),
             localization=localization,
         )
-        return scenario.closed_loop(self._track(track_name))
+        return scenario.closed_loop(self._track(track_name), rules=self.config.rules)
 
-    def _track(self, name: str) -> Track:
-        if name not in self._track_cache:
-            self._track_cache[name] = load_track(name)
-        return self._track_cache[name]
+    def _track(self, name: TrackSource) -> Track:
+        cache = self._track_cache
+        if name not in cache:
+            if len(cache) >= TRACK_CACHE_SIZE:  # the oldest goes (random tracks)
+                del cache[next(iter(cache))]
+            cache[name] = load_track(name)
+        return cache[name]
+
+    def _generated(self, index: int) -> GeneratedTrack:
+        """The generated track of ``track_seeds[index]``, or of the next seed
+        that makes one (a seed for which the generator gives up is skipped)."""
+        seeds = self.config.track_seeds
+        for k in range(min(len(seeds), GENERATION_TRIES)):
+            seed = seeds[(index + k) % len(seeds)]
+            source = GeneratedTrack(seed, self.config.track_spec)
+            try:
+                self._track(source)
+            except TrackGenerationError:
+                continue
+            return source
+        raise TrackGenerationError(
+            f"track_seeds {seeds}: no track from {GENERATION_TRIES} seeds from index {index} on"
+        )
 
     def _take(self, record: StepRecord) -> None:
         """Keep what the observation, the info and the picture need from a record."""
@@ -267,14 +380,24 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
     def _observe(self) -> ObsType:
         loop = self.loop
         estimate = loop.localizer.estimate(loop.time)
-        dict_pose = self.config.observation == "dict" and estimate is None
-        return build_observation(
+        cfg = self.config
+        if cfg.observation == "vector":
+            valid = estimate is not None if loop.localization == "fused" else bool(self._broadcast)
+            return build_vector(
+                self._memory,
+                estimate,
+                self._command,
+                cfg.max_cones,
+                loop.world_config.sensor_profile.cones.max_range,
+                pose_valid=valid,
+                now=loop.time,
+            )
+        return build_dict(
             self._memory,
             estimate,
-            self._action,
-            self.config.max_cones,
-            self.config.observation,
-            published=loop.localizer.published_pose() if dict_pose else None,
+            self._command,
+            cfg.max_cones,
+            published=loop.localizer.published_pose() if estimate is None else None,
             awaiting_estimate=estimate is None and loop.localization == "fused",
             now=loop.time,
         )
@@ -282,17 +405,16 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
     def _reward_terms(self, last: StepRecord, now: StepRecord) -> dict[str, float]:
         """Each weighted term of the step's reward, from the two records' standings."""
         w = self.config.rewards
-        weights = {
-            "progress": w.progress,
-            "time": w.time,
-            "cone_hit": w.cone_hit,
-            "cone_doo": w.cone_doo,
-            "off_track": w.off_track,
-            "lap": w.lap,
-        }
-        before, after = _counts(last), _counts(now)
+        before, after = last.truth.race, now.truth.race
         # + 0.0: a term with nothing to count is 0.0, not -0.0 (a negative weight times 0)
-        return {k: weights[k] * (after[k] - before[k]) + 0.0 for k in REWARD_TERMS}
+        return {
+            "progress": w.progress * (after.progress_m - before.progress_m) + 0.0,
+            "time": w.time * (now.t - last.t) + 0.0,
+            "cone_hit": w.cone_hit * (after.cones_hit - before.cones_hit) + 0.0,
+            "cone_doo": w.cone_doo * (after.cones_down_or_out - before.cones_down_or_out) + 0.0,
+            "off_track": w.off_track * (after.off_track_events - before.off_track_events) + 0.0,
+            "lap": w.lap * (after.laps_completed - before.laps_completed) + 0.0,
+        }
 
     @property
     def laps_to_drive(self) -> int:
@@ -302,28 +424,33 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
     def _info(self, terms: dict[str, float]) -> dict[str, Any]:
         record = self._record
         assert record is not None
-        race = record.truth.race
+        race: RaceStanding = record.truth.race
         state = record.truth.state
-        antenna = record.truth.antenna
         info: dict[str, Any] = {
             "t": record.t,
-            "reward_terms": terms,
-            "end_reason": "" if record.end is None else str(record.end),
-            "laps_completed": race.laps_completed,
-            "lap_times": list(race.lap_times),
             "progress_m": race.progress_m,
+            "speed": state.speed,
+            "laps_completed": race.laps_completed,
+            "lap_time": race.lap_times[-1] if race.lap_times else 0.0,
             "cones_hit": race.cones_hit,
             "cones_down_or_out": race.cones_down_or_out,
             "off_track_events": race.off_track_events,
-            "truth": {
-                "x": antenna.x,
-                "y": antenna.y,
-                "yaw": antenna.yaw,
-                "speed": state.speed,
-                "steer": state.steer,
-            },
-            "messages": record.messages,
+            "end_reason": 0 if record.end is None else _END_CODES[record.end],
+            "track_seed": self.track_seed,
+            "reward_terms": terms,
         }
+        if self.config.info == "lean":
+            return info
+        antenna = record.truth.antenna
+        info["lap_times"] = list(race.lap_times)
+        info["truth"] = {
+            "x": antenna.x,
+            "y": antenna.y,
+            "yaw": antenna.yaw,
+            "speed": state.speed,
+            "steer": state.steer,
+        }
+        info["messages"] = record.messages
         last = self._broadcast
         # Always a dict, inf (no pose yet) before the first broadcast: gymnasium's
         # vector envs stack each info key across sub-envs and need one type per
@@ -347,17 +474,9 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         return self._scenes.scene(loop.localizer.frames, loop.localizer.estimate(loop.time))
 
 
-def _counts(record: StepRecord) -> dict[str, float]:
-    """What the reward terms count, after a step."""
-    race: RaceStanding = record.truth.race
-    return {
-        "progress": race.progress_m,
-        "time": record.t,
-        "cone_hit": float(race.cones_hit),
-        "cone_doo": float(race.cones_down_or_out),
-        "off_track": float(race.off_track_events),
-        "lap": float(race.laps_completed),
-    }
+def _generator_seed(track: TrackSource) -> int:
+    """A generated track's seed, -1 for any other track (``info["track_seed"]``)."""
+    return track.seed if isinstance(track, GeneratedTrack) else -1
 
 
 def _start_pose_option(value: Any) -> Pose2D | None:

@@ -20,46 +20,56 @@ import numbers
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal, get_args
 
 import numpy as np
 
 from conesim.envs.dataclass_io import build
+from conesim.envs.loop import EpisodeRules
 from conesim.envs.scenario import EkfTuning, Localization, Scenario
-from conesim.envs.scenario_file import load_scenario
+from conesim.envs.scenario_file import load_scenario, track_from_data
 from conesim.localization.ekf import EkfConfig
 from conesim.localization.modes import LOCALIZATION_MODES
 from conesim.planner import AutopilotConfig
 from conesim.sim.sensors import PROFILES as SENSOR_PROFILES
 from conesim.sim.sensors import Faults, SensorProfile, get_profile
 from conesim.sim.vehicle_params import VehicleParams
-from conesim.tracks import DEFAULT_TRACK
+from conesim.tracks import DEFAULT_TRACK, GeneratedTrack, TrackSpec
 
 OBSERVATION_MODES = ("vector", "dict")
+RANDOM_TRACK = "random"
+"""``track="random"``: a generated track per episode, its seed drawn from ``track_seeds``."""
+ActionMode = Literal["centred", "physical"]
+InfoMode = Literal["lean", "full"]
+ACTION_MODES: tuple[str, ...] = get_args(ActionMode)
+INFO_MODES: tuple[str, ...] = get_args(InfoMode)
 
 
 @dataclass(frozen=True)
 class RewardWeights:
     """Weights of the named reward terms (each term is also in ``info``).
 
-    The default penalties follow the Formula Student scoring: 2 s per cone
-    down or out, 10 s per off-course (REFERENCES.md), as metres of progress
-    at 10 m/s (-20 and -100).
+    The default trades progress against time at 1 m per second and charges
+    the Formula Student penalties at that rate: 2 s per cone down or out,
+    10 s per off-course (REFERENCES.md), so a completed lap's return is its
+    length minus its FS time, lap time plus penalties (the env's module
+    docstring, "Rewards", works the numbers).
 
     Attributes:
         progress: per metre of net progress along the true centreline [1/m].
         time: per second of simulated time (negative: a cost) [1/s].
-        cone_hit: per cone touched (counted once per cone).
+        cone_hit: per cone touched (counted once per cone); FS charges only
+            cones down or out.
         cone_doo: per cone down or out.
         off_track: per excursion off the track.
         lap: per completed lap.
     """
 
     progress: float = 1.0  # [1/m]
-    time: float = -1.0  # [1/s]
-    cone_hit: float = -5.0
-    cone_doo: float = -20.0  # FS: 2 s per DOO x 10 m/s
-    off_track: float = -100.0  # FS: 10 s per off-course x 10 m/s
+    time: float = -1.0  # [1/s] the exchange rate: 1 s costs 1 m of progress
+    cone_hit: float = 0.0
+    cone_doo: float = -2.0  # FS: 2 s per DOO, at 1 m/s
+    off_track: float = -10.0  # FS: 10 s per off-course, at 1 m/s
     lap: float = 0.0
 
     def __post_init__(self) -> None:
@@ -74,7 +84,15 @@ class EnvConfig:
     """Settings of ``conesim/ConeTrack-v0``.
 
     Attributes:
-        track: shipped track name or a track file.
+        track: shipped track name or a track file, or a generated track: a
+            ``GeneratedTrack`` or ``{"generate": {"seed": S, ...}}``; or
+            ``"random"``: a generated track per episode.
+        track_seeds: the generator's seeds ``track="random"`` draws from,
+            one per episode, uniformly with the episode's generator: a
+            ``range`` or a pair ``(lo, hi)``, ``lo`` included and ``hi``
+            not (train on ``(0, 1000)``, test on ``(1000, 1100)``).
+        track_spec: the generated tracks' settings (``tracks.TrackSpec``, or
+            a mapping of its fields).
         sensors: sensor profile, or a shipped one's name (``ideal``, ``rtk``,
             ``consumer``, ``consumer_white``).
         localization: ``fused`` (EKF), ``raw`` (the ROS pipeline's) or ``truth``.
@@ -83,9 +101,18 @@ class EnvConfig:
         physics_rate: physics steps per second [Hz]; a multiple of control_rate.
         time_limit: truncation time [s]; None = 60 s per lap plus 30 s.
         max_cones: K, the detected cones in the observation [-].
-        observation: ``vector`` (flat float32 Box) or ``dict``.
+        observation: ``vector`` (normalised float32 Box) or ``dict`` (raw units).
+        action: ``centred`` (``Box(-1, 1)``, zero is no steering and no
+            acceleration, symmetric) or ``physical`` (steering [rad],
+            acceleration [m/s^2]).
+        info: ``lean`` (numbers only) or ``full`` (also the messages, lap
+            times, truth and localization error).
         terminate_off_track: end the episode when the car leaves the track.
         terminate_stuck: end the episode when the car makes no progress.
+        stuck_time: the stuck rule's window [s].
+        stuck_progress: less net progress than this in ``stuck_time`` is
+            stuck [m].
+        stuck_grace: the stuck rule ends no episode before this time [s].
         rewards: reward weights.
         faults: what goes wrong with the sensors (``sim.sensors.faults``).
         ekf: the filter's settings; None: the tuning ``ekf_tuning`` names
@@ -96,7 +123,9 @@ class EnvConfig:
             (None: the localization's default); the env itself has no driver.
     """
 
-    track: str = DEFAULT_TRACK
+    track: str | GeneratedTrack = DEFAULT_TRACK
+    track_seeds: range | tuple[int, int] = range(1000)
+    track_spec: TrackSpec = dataclasses.field(default_factory=TrackSpec)
     sensors: str = "rtk"
     localization: Localization = "fused"
     laps: int = 1
@@ -105,8 +134,13 @@ class EnvConfig:
     time_limit: float | None = None  # [s]
     max_cones: int = 32
     observation: str = "vector"
+    action: ActionMode = "centred"
+    info: InfoMode = "lean"
     terminate_off_track: bool = True
     terminate_stuck: bool = True
+    stuck_time: float = 10.0  # [s]
+    stuck_progress: float = 1.0  # [m]
+    stuck_grace: float = 15.0  # [s]
     rewards: RewardWeights = dataclasses.field(default_factory=RewardWeights)
     faults: Faults = dataclasses.field(default_factory=Faults)
     ekf: EkfConfig | None = None
@@ -117,13 +151,29 @@ class EnvConfig:
     def __post_init__(self) -> None:
         if not isinstance(self.sensors, SensorProfile):
             _choice("sensors", self.sensors, tuple(SENSOR_PROFILES))
-        for name, cls in (("faults", Faults), ("vehicle", VehicleParams), ("ekf", EkfConfig)):
+        object.__setattr__(self, "track_seeds", _seed_range(self.track_seeds))
+        parts = (
+            ("faults", Faults),
+            ("vehicle", VehicleParams),
+            ("ekf", EkfConfig),
+            ("track_spec", TrackSpec),
+        )
+        for name, cls in parts:
             if isinstance(getattr(self, name), Mapping):
                 object.__setattr__(self, name, build(cls, getattr(self, name), path=(name,)))
         _choice("localization", self.localization, LOCALIZATION_MODES)
         _choice("observation", self.observation, OBSERVATION_MODES)
-        if not (isinstance(self.track, str | os.PathLike) and os.fspath(self.track)):
-            raise ValueError(f"EnvConfig.track must be a track name or file, got {self.track!r}")
+        _choice("action", self.action, ACTION_MODES)
+        _choice("info", self.info, INFO_MODES)
+        if isinstance(self.track, Mapping):  # {generate: {seed: S, ...}}, as in a scenario file
+            object.__setattr__(self, "track", track_from_data(self.track, ("EnvConfig.track",)))
+        if not isinstance(self.track, GeneratedTrack) and not (
+            isinstance(self.track, str | os.PathLike) and os.fspath(self.track)
+        ):
+            raise ValueError(
+                f"EnvConfig.track must be a track name or file, a GeneratedTrack or "
+                f"{{generate: {{seed: S, ...}}}}, got {self.track!r}"
+            )
         if not (_is_int(self.laps) and self.laps >= 1):
             raise ValueError(f"EnvConfig.laps must be an integer >= 1, got {self.laps!r}")
         if not (_is_int(self.max_cones) and 1 <= self.max_cones <= 512):
@@ -148,14 +198,24 @@ class EnvConfig:
                 f"EnvConfig.physics_rate ({self.physics_rate} Hz) must be a whole multiple "
                 f"of control_rate ({self.control_rate} Hz)"
             )
+        stuck = (("stuck_time", False), ("stuck_progress", True), ("stuck_grace", True))
+        for name, closed in stuck:
+            value = getattr(self, name)
+            if not (
+                _is_real(value) and math.isfinite(value) and (value >= 0 if closed else value > 0)
+            ):
+                bound = ">= 0" if closed else "> 0"
+                unit = "[m]" if name == "stuck_progress" else "[s]"
+                raise ValueError(f"EnvConfig.{name} must be {bound} {unit}, got {value!r}")
         if self.time_limit is not None and not (
             _is_real(self.time_limit) and math.isfinite(self.time_limit) and self.time_limit > 0
         ):
             raise ValueError(f"EnvConfig.time_limit must be > 0 [s], got {self.time_limit!r}")
         # Plain Python values from here: a numpy float32 rate would make the
         # simulation clock float32 and the same seed give another run.
+        track = self.track
         plain = {
-            "track": os.fspath(self.track),
+            "track": track if isinstance(track, GeneratedTrack) else os.fspath(track),
             "laps": int(self.laps),
             "max_cones": int(self.max_cones),
             "control_rate": float(self.control_rate),
@@ -163,6 +223,9 @@ class EnvConfig:
             "time_limit": None if self.time_limit is None else float(self.time_limit),
             "terminate_off_track": bool(self.terminate_off_track),
             "terminate_stuck": bool(self.terminate_stuck),
+            "stuck_time": float(self.stuck_time),
+            "stuck_progress": float(self.stuck_progress),
+            "stuck_grace": float(self.stuck_grace),
         }
         for name, value in plain.items():
             object.__setattr__(self, name, value)
@@ -177,6 +240,16 @@ class EnvConfig:
     def episode_time_limit(self) -> float:
         """The truncation time [s]."""
         return self.time_limit if self.time_limit is not None else 60.0 * self.laps + 30.0
+
+    @property
+    def rules(self) -> EpisodeRules:
+        """When the env's episodes end (the scenario's rules with the stuck rule's settings)."""
+        return dataclasses.replace(
+            self.to_scenario().rules,
+            stuck_time=self.stuck_time,
+            stuck_progress=self.stuck_progress,
+            stuck_grace=self.stuck_grace,
+        )
 
     def to_scenario(self) -> Scenario:
         """The scenario the env's episodes run (its seed: ``reset``'s, not this)."""
@@ -229,6 +302,24 @@ SCENARIO_FIELDS = {
 def scenario_settings(scenario: Scenario) -> dict[str, Any]:
     """The ``EnvConfig`` keys a scenario sets (all but its seed)."""
     return {key: getattr(scenario, field) for key, field in SCENARIO_FIELDS.items()}
+
+
+def _seed_range(value: Any) -> range:
+    """``track_seeds`` as a range: a range or a pair (lo, hi) of seeds, lo < hi."""
+    if isinstance(value, range):
+        seeds = value
+    elif isinstance(value, tuple | list) and len(value) == 2 and all(_is_int(v) for v in value):
+        seeds = range(int(value[0]), int(value[1]))
+    else:
+        raise ValueError(
+            f"EnvConfig.track_seeds must be a range or a pair (lo, hi) of integers, got {value!r}"
+        )
+    if len(seeds) == 0 or min(seeds[0], seeds[-1]) < 0 or max(seeds[0], seeds[-1]) >= 2**63:
+        raise ValueError(
+            f"EnvConfig.track_seeds = {value!r} is out of range: allowed a non-empty range "
+            "of seeds in [0, 2**63)"
+        )
+    return seeds
 
 
 def _weights(weights: Mapping[str, Any]) -> RewardWeights:

@@ -25,6 +25,7 @@ does from its ``np_random``, so ``conesim run --seed S`` and
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -43,6 +44,7 @@ from conesim.localization.localizer import Localizer
 from conesim.planner.autopilot import CONTROL_RATE, AutopilotStep
 from conesim.planner.messages import ControlCommand
 from conesim.sim.events import Event, RaceStanding
+from conesim.sim.race_control import RaceRules
 from conesim.sim.vehicle import VehicleState
 from conesim.sim.world import World, WorldConfig
 from conesim.tracks import Track
@@ -87,17 +89,29 @@ class EndReason(StrEnum):
 class EpisodeRules:
     """When an episode ends.
 
+    The stuck rule: race control finds the car stuck when it has made less
+    than ``stuck_progress`` of net progress along the centreline in the last
+    ``stuck_time`` (``sim.race_control``); the episode ends on it only from
+    ``stuck_grace`` on, so a car is never stuck before it had a chance to move.
+
     Attributes:
         laps: laps to complete [-] (an open lane is one run, whatever this says).
         time_limit: truncation time [s]; None: 60 s per lap plus 30 s.
         end_on_off_track: end when the car leaves the track.
         end_on_stuck: end when race control finds the car stuck.
+        stuck_time: the stuck rule's window [s] (race control's ``stuck_time_s``).
+        stuck_progress: net progress below which the car is stuck [m]
+            (race control's ``stuck_progress_m``).
+        stuck_grace: no end on the stuck rule before this time [s].
     """
 
     laps: int = 1
     time_limit: float | None = None  # [s]
     end_on_off_track: bool = True
     end_on_stuck: bool = True
+    stuck_time: float = 5.0  # [s]
+    stuck_progress: float = 0.5  # [m]
+    stuck_grace: float = 0.0  # [s]
 
     def __post_init__(self) -> None:
         if not (isinstance(self.laps, int) and self.laps >= 1):
@@ -105,6 +119,22 @@ class EpisodeRules:
         limit = self.time_limit
         if limit is not None and not (math.isfinite(limit) and limit > 0.0):
             raise ValueError(f"EpisodeRules.time_limit must be > 0 [s], got {limit!r}")
+        for name, low, closed in (
+            ("stuck_time", 0.0, False),
+            ("stuck_progress", 0.0, True),
+            ("stuck_grace", 0.0, True),
+        ):
+            value = getattr(self, name)
+            inside = value >= low if closed else value > low
+            if not (math.isfinite(value) and inside):
+                bound = ">=" if closed else ">"
+                raise ValueError(f"EpisodeRules.{name} must be finite and {bound} 0, got {value!r}")
+
+    def race_rules(self, rules: RaceRules) -> RaceRules:
+        """Race control's settings ``rules`` with this stuck rule's window and threshold."""
+        return dataclasses.replace(
+            rules, stuck_time_s=self.stuck_time, stuck_progress_m=self.stuck_progress
+        )
 
     @property
     def time_limit_s(self) -> float:
@@ -221,7 +251,8 @@ class ClosedLoop:
         localization: ``fused`` (EKF), ``raw`` (the ROS pipeline's) or ``truth``.
         control_rate: steps per simulated second [Hz]; ``world.physics_rate``
             is a whole multiple of it.
-        rules: when an episode ends.
+        rules: when an episode ends; its stuck window and threshold replace
+            ``world.rules``' (race control's detector is the rule's).
         driver: builds the driver for each episode (``Autopilot``, or a
             ``functools.partial`` of it with its config); None: the caller
             passes the command to :meth:`step`.
@@ -254,9 +285,11 @@ class ClosedLoop:
         survey: PathSurvey | None = None,
     ) -> None:
         self.track = track
-        self.world_config = world or WorldConfig()
-        self.localization = localization
         self.rules = rules or EpisodeRules()
+        world = world or WorldConfig()
+        # The episode's stuck rule is race control's: one detector, set here.
+        self.world_config = dataclasses.replace(world, rules=self.rules.race_rules(world.rules))
+        self.localization = localization
         if not (math.isfinite(control_rate) and control_rate > 0.0):
             raise ValueError(f"ClosedLoop: control_rate must be > 0 [Hz], got {control_rate!r}")
         ratio = self.world_config.physics_rate / control_rate
@@ -389,7 +422,7 @@ class ClosedLoop:
             return EndReason.LAPS_COMPLETED
         if rules.end_on_off_track and race.off_track_events:
             return EndReason.OFF_TRACK
-        if rules.end_on_stuck and race.stuck:
+        if rules.end_on_stuck and race.stuck and t >= rules.stuck_grace - _TIME_EPS:
             return EndReason.STUCK
         if t >= rules.time_limit_s - _TIME_EPS:
             return EndReason.TIME_LIMIT

@@ -1,22 +1,48 @@
 """The env's observation: the estimated ego state and the K nearest detected cones.
 
-Vector mode (float32, shape ``(6 + 3 K,)``)::
+Vector mode (the default): float32, shape ``(8 + 5 K,)``, every entry
+scaled to order 1 and clipped to the space's bounds::
 
-    [speed, yaw_rate, steer_cmd, accel_cmd, pos_std, yaw_std,
-     x_1, y_1, m_1, ..., x_K, y_K, m_K]
+    [speed, yaw_rate, steer, accel, pose_valid, pos_std, yaw_std, cones_age,
+     x_1, y_1, m_1, side_1, orange_1, ..., x_K, y_K, m_K, side_K, orange_K]
 
-* ``speed`` [m/s] and ``yaw_rate`` [rad/s]: the EKF estimate in ``fused`` mode,
-  otherwise the last wheel-speed and gyro messages (what the car measures);
-* ``steer_cmd``, ``accel_cmd``: the previous action, in [-1, 1];
-* ``pos_std`` [m], ``yaw_std`` [rad]: the EKF's 1-sigma uncertainty, the
-  position's radial sqrt(sigma_x^2 + sigma_y^2) and the heading's (0 when no
-  filter runs: ``truth`` is exact, ``raw`` states none; their upper bounds,
-  1000 m and pi, while the filter has no estimate yet);
-* ``x_i, y_i`` [m]: the latest cone detection in ``os_sensor``, nearest first
-  (the ROS pipeline's ``/sorted_cones_time``), ``m_i`` = 1 for a real entry and 0 for
-  padding (padded entries are zero).
+============  ===========================================  =========  ==========
+entry         what                                         scale      bounds
+============  ===========================================  =========  ==========
+speed         estimated forward speed                      20 m/s     [-1, 2]
+yaw_rate      estimated yaw rate                           2 rad/s    [-2, 2]
+steer, accel  the previous command (below)                 (below)    [-1, 1]
+pose_valid    1 once localization has a pose, else 0       -          {0, 1}
+pos_std       EKF 1-sigma position, sqrt(sx^2 + sy^2)      1 m        [0, 3]
+yaw_std       EKF 1-sigma heading                          0.1 rad    [0, 3]
+cones_age     now minus the detection's capture stamp      1 s        [0, 1]
+x_i, y_i      detected cone in ``os_sensor``, nearest 1st  max_range  [-1, 1]
+m_i           1 for a detected cone, 0 for padding         -          {0, 1}
+side_i        +1 blue (left), -1 yellow (right), else 0    -          {-1, 0, 1}
+orange_i      1 for an orange or big orange cone           -          {0, 1}
+============  ===========================================  =========  ==========
 
-Dict mode adds the colours (one-hot over ``CONE_COLOURS``), the pose of
+Each entry is its value divided by its scale, then clipped to its bounds.
+
+* speed and yaw rate are the EKF's estimate in ``fused`` mode once it has
+  one, otherwise the last wheel-speed and gyro messages (what the car
+  measures);
+* steer and accel: the commanded steering over ``max_steer`` and
+  acceleration over the action's acceleration scale (``max_accel`` for the
+  centred action, ``max_decel`` for the physical one), so the centred
+  action reads back as itself;
+* ``pose_valid`` is 0 before localization has a pose (the filter not yet
+  initialised, or no broadcast yet); ``pos_std`` and ``yaw_std`` are then 0,
+  as they are where no filter runs (``truth`` is exact, ``raw`` states none);
+* ``max_range`` is the cone detector's (rtk: 15 m); padded cones are zeros;
+  a colour-blind detection or an ``unknown`` cone has side and orange 0;
+  ``cones_age`` is 1 before the first detection.
+
+Dict mode (raw units, as before the vector mode was normalised): ``ego`` is
+``[speed, yaw_rate, steer_cmd, accel_cmd, pos_std, yaw_std]`` [m/s, rad/s,
+-, -, m, rad], the uncertainties at their upper bounds (1000 m, pi) while
+the filter has no estimate yet; ``cones`` (K, 2) [m] in ``os_sensor`` with
+``cone_mask``, the colours (one-hot over ``CONE_COLOURS``), the pose of
 ``gps_antenna`` in ``reference`` with its 3x3 covariance, and ``pose_valid``:
 in ``fused`` mode the EKF's estimate now and its covariance; in ``raw`` and
 ``truth`` mode the pose the frame tree holds (the broadcaster's last
@@ -46,7 +72,6 @@ from conesim.core.messages import CONE_COLOURS, ConeDetections, Imu, Message, Wh
 from conesim.core.pose import Pose2D
 from conesim.localization.ekf import Estimate
 
-EGO_SIZE = 6
 EGO_LOW = np.array([-5.0, -10.0, -1.0, -1.0, 0.0, 0.0], dtype=np.float32)
 EGO_HIGH = np.array([60.0, 10.0, 1.0, 1.0, 1e3, math.pi], dtype=np.float32)
 CONE_BOUND = 100.0  # [m] beyond any detector's range
@@ -54,14 +79,30 @@ POSE_BOUND = 1e5  # [m]
 AGE_BOUND = 1e3  # [s] the detection's age before there is one
 
 
+# Vector mode: the ego entries' scales and bounds (see the module docstring).
+VECTOR_EGO_SIZE = 8
+VECTOR_CONE_SIZE = 5
+SPEED_SCALE = 20.0  # [m/s]
+YAW_RATE_SCALE = 2.0  # [rad/s]
+POS_STD_SCALE = 1.0  # [m]
+YAW_STD_SCALE = 0.1  # [rad]
+AGE_SCALE = 1.0  # [s]
+VECTOR_EGO_LOW = np.array([-1.0, -2.0, -1.0, -1.0, 0.0, 0.0, 0.0, 0.0], dtype=np.float32)
+VECTOR_EGO_HIGH = np.array([2.0, 2.0, 1.0, 1.0, 1.0, 3.0, 3.0, 1.0], dtype=np.float32)
+_EGO_LOW = VECTOR_EGO_LOW.tolist()
+_EGO_HIGH = VECTOR_EGO_HIGH.tolist()
+_SIDE = {"blue": 1.0, "yellow": -1.0}
+_ORANGE = {"orange": 1.0, "big_orange": 1.0}
+
+
 def observation_space(max_cones: int, mode: str) -> spaces.Space[Any]:
     """The Box (vector) or Dict (dict) observation space."""
-    cone_low = np.tile(np.array([-CONE_BOUND, -CONE_BOUND, 0.0], np.float32), max_cones)
-    cone_high = np.tile(np.array([CONE_BOUND, CONE_BOUND, 1.0], np.float32), max_cones)
     if mode == "vector":
+        cone_low = np.tile(np.array([-1.0, -1.0, 0.0, -1.0, 0.0], np.float32), max_cones)
+        cone_high = np.tile(np.array([1.0, 1.0, 1.0, 1.0, 1.0], np.float32), max_cones)
         return spaces.Box(
-            np.concatenate([EGO_LOW, cone_low]),
-            np.concatenate([EGO_HIGH, cone_high]),
+            np.concatenate([VECTOR_EGO_LOW, cone_low]),
+            np.concatenate([VECTOR_EGO_HIGH, cone_high]),
             dtype=np.float32,
         )
     return spaces.Dict(
@@ -91,8 +132,10 @@ class SensorMemory:
     yaw_rate: float = 0.0
     # The cone part of the observation, built once per detection (the
     # detector runs at 10 Hz, the env observes at 50 Hz): the detection and
-    # max_cones it was built for, then (cones, mask, colours, flat).
+    # max_cones it was built for, then (cones, mask, colours).
     _cone_block: tuple[Any, ...] | None = field(default=None, repr=False, compare=False)
+    # Vector mode's cone entries, likewise: (detection, max_cones, range, flat).
+    _vector_block: tuple[Any, ...] | None = field(default=None, repr=False, compare=False)
 
     def update(self, messages: list[Message]) -> None:
         """Keep the newest detection, wheel speed and gyro reading (finite ones)."""
@@ -106,15 +149,15 @@ class SensorMemory:
 
     def cone_block(
         self, max_cones: int
-    ) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], NDArray[np.float32]]:
-        """(cones, mask, colours, flat [x, y, m] * K) of the latest detection.
+    ) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32]]:
+        """(cones, mask, colours) of the latest detection, dict mode's raw units.
 
         Built once per detection and kept; callers copy what they hand out.
         """
         det = self.detections
         block = self._cone_block
         if block is not None and block[0] is det and block[1] == max_cones:
-            return block[2], block[3], block[4], block[5]
+            return block[2], block[3], block[4]
         cones = np.zeros((max_cones, 2), dtype=np.float32)
         mask = np.zeros(max_cones, dtype=np.float32)
         colours = np.zeros((max_cones, len(CONE_COLOURS)), dtype=np.float32)
@@ -128,53 +171,117 @@ class SensorMemory:
             if det.colours is not None:
                 for k, row in enumerate(rows):
                     colours[k, CONE_COLOURS.index(det.colours[row])] = 1.0
-        flat = np.column_stack([cones, mask]).ravel()
-        self._cone_block = (det, max_cones, cones, mask, colours, flat)
-        return cones, mask, colours, flat
+        self._cone_block = (det, max_cones, cones, mask, colours)
+        return cones, mask, colours
+
+    def vector_cones(self, max_cones: int, max_range: float) -> NDArray[np.float32]:
+        """Vector mode's cone entries ``[x, y, m, side, orange] * K`` (module docstring).
+
+        Built once per detection and kept; the caller copies it into the observation.
+        """
+        det = self.detections
+        block = self._vector_block
+        if block is not None and block[0] is det and block[1:3] == (max_cones, max_range):
+            flat: NDArray[np.float32] = block[3]
+            return flat
+        out = np.zeros((max_cones, VECTOR_CONE_SIZE), dtype=np.float32)
+        if det is not None and len(det):
+            pts = np.asarray(det.points[:, :2], dtype=float)
+            rows = np.flatnonzero(np.all(np.isfinite(pts), axis=1))[:max_cones]
+            n = len(rows)
+            out[:n, :2] = np.clip(pts[rows] / max_range, -1.0, 1.0)
+            out[:n, 2] = 1.0
+            if det.colours is not None:
+                colours = [det.colours[row] for row in rows]
+                out[:n, 3] = [_SIDE.get(c, 0.0) for c in colours]
+                out[:n, 4] = [_ORANGE.get(c, 0.0) for c in colours]
+        flat = out.ravel()
+        self._vector_block = (det, max_cones, max_range, flat)
+        return flat
 
 
-def build_observation(
+def _motion(memory: SensorMemory, estimate: Estimate | None) -> tuple[float, float, float, float]:
+    """(speed [m/s], yaw rate [rad/s], 1-sigma position [m] and heading [rad]):
+    the estimate's, or without one the last messages' with no uncertainty."""
+    if estimate is None:
+        return memory.wheel_speed, memory.yaw_rate, 0.0, 0.0
+    cov = estimate.pose_covariance
+    pos_std = math.sqrt(max(0.0, float(cov[0, 0] + cov[1, 1])))
+    yaw_std = math.sqrt(max(0.0, float(cov[2, 2])))
+    return estimate.speed, estimate.yaw_rate, pos_std, yaw_std
+
+
+def build_vector(
     memory: SensorMemory,
     estimate: Estimate | None,
-    action: NDArray[np.float32],
+    command: tuple[float, float],
     max_cones: int,
-    mode: str,
+    max_range: float,
+    *,
+    pose_valid: bool,
+    now: float,
+) -> NDArray[np.float32]:
+    """The normalised vector observation (see the module docstring).
+
+    Args:
+        memory: the latest messages.
+        estimate: the EKF's estimate now, or None (no filter, or not yet).
+        command: the previous command over the action's scales [-].
+        max_cones: K.
+        max_range: the cone detector's range, the cones' scale [m].
+        pose_valid: localization has a pose.
+        now: the simulation time [s].
+    """
+    speed, yaw_rate, pos_std, yaw_std = _motion(memory, estimate)
+    det = memory.detections
+    age = 1.0 if det is None else (now - det.header.stamp) / AGE_SCALE
+    ego = (
+        speed / SPEED_SCALE,
+        yaw_rate / YAW_RATE_SCALE,
+        command[0],
+        command[1],
+        1.0 if pose_valid else 0.0,
+        pos_std / POS_STD_SCALE,
+        yaw_std / YAW_STD_SCALE,
+        age if math.isfinite(age) else 1.0,
+    )
+    out = np.empty(VECTOR_EGO_SIZE + VECTOR_CONE_SIZE * max_cones, dtype=np.float32)
+    # clipped as plain floats: np.clip's wrapper costs more than the rest
+    out[:VECTOR_EGO_SIZE] = [
+        min(max(v, lo), hi) for v, lo, hi in zip(ego, _EGO_LOW, _EGO_HIGH, strict=True)
+    ]
+    out[VECTOR_EGO_SIZE:] = memory.vector_cones(max_cones, max_range)
+    return out
+
+
+def build_dict(
+    memory: SensorMemory,
+    estimate: Estimate | None,
+    command: tuple[float, float],
+    max_cones: int,
     *,
     published: Pose2D | None = None,
     awaiting_estimate: bool = False,
     now: float,
-) -> NDArray[np.float32] | dict[str, NDArray[np.float32]]:
-    """The observation for the current step (see the module docstring).
+) -> dict[str, NDArray[np.float32]]:
+    """The dict observation for the current step (see the module docstring).
 
-    ``published`` is the frame tree's pose, used in dict mode when there is
-    no ``estimate`` (``raw`` and ``truth`` localization).
+    ``command``: the previous command over the action's scales.
+    ``published`` is the frame tree's pose, used when there is no
+    ``estimate`` (``raw`` and ``truth`` localization).
     ``awaiting_estimate``: a filter runs but has no estimate yet, so the
     uncertainties are their upper bounds, not the 0 of "no filter".
-    ``now``: the simulation time [s], for the detection's age in dict mode.
+    ``now``: the simulation time [s], for the detection's age.
     """
+    speed, yaw_rate, pos_std, yaw_std = _motion(memory, estimate)
     if estimate is None and awaiting_estimate:
-        speed, yaw_rate = memory.wheel_speed, memory.yaw_rate
         pos_std, yaw_std = float(EGO_HIGH[4]), float(EGO_HIGH[5])
-    elif estimate is not None:
-        speed, yaw_rate = estimate.speed, estimate.yaw_rate
-        cov = estimate.pose_covariance
-        pos_std = math.sqrt(max(0.0, float(cov[0, 0] + cov[1, 1])))
-        yaw_std = math.sqrt(max(0.0, float(cov[2, 2])))
-    else:
-        speed, yaw_rate, pos_std, yaw_std = memory.wheel_speed, memory.yaw_rate, 0.0, 0.0
-    ego = np.minimum(
-        np.maximum(
-            np.array([speed, yaw_rate, action[0], action[1], pos_std, yaw_std], dtype=np.float32),
-            EGO_LOW,
-        ),
+    ego = np.clip(
+        np.array([speed, yaw_rate, command[0], command[1], pos_std, yaw_std], dtype=np.float32),
+        EGO_LOW,
         EGO_HIGH,
-    )  # np.clip's values, without its wrapper's cost
-    cones, mask, colours, flat = memory.cone_block(max_cones)
-    if mode == "vector":
-        out = np.empty(EGO_SIZE + flat.size, dtype=np.float32)
-        out[:EGO_SIZE] = ego
-        out[EGO_SIZE:] = flat
-        return out
+    )
+    cones, mask, colours = memory.cone_block(max_cones)
     cones, mask, colours = cones.copy(), mask.copy(), colours.copy()
     pose_cov = np.zeros((3, 3), dtype=np.float32)
     if estimate is not None:

@@ -21,11 +21,13 @@ the bag's directory must be new or empty, and is the bag's alone).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 
-from conesim.envs.paths import nearest_existing, os_reason, probe_writable
+from conesim.envs.paths import missing_dirs, nearest_existing, os_reason, probe_writable
 
 OUTPUT_FILES = ("run.png", "result.json")  # the order they are moved into place
 _RESULT_KEYS = ("track", "end_reason")  # a result.json that conesim wrote has these
@@ -102,3 +104,54 @@ def _check_contents(out: Path, scenario: Path | None) -> None:
             f"{out}: holds other files ({shown}) and no previous run's result.json; "
             "give a new or empty directory"
         )
+
+
+def write_together(out: Path, writers: Mapping[str, Callable[[Path], object]]) -> None:
+    """Write files into ``out`` (made if missing): all of them, or none.
+
+    ``writers`` maps each file's name to a function that writes it to the
+    path it is given. Each goes to a temporary name first; they are moved
+    into place, in order, only when all were written. Files of the same
+    names already there are first moved aside and put back if a move fails,
+    so ``out`` holds the new set or the old one, never a mix; directories
+    this call created are removed on any failure. One writer per directory
+    at a time: two writing the same ``out`` at once may interleave their moves.
+
+    Raises:
+        OSError: a file could not be written or moved (nothing is left of it).
+    """
+    created = missing_dirs(out)
+    tag = f"{os.getpid()}.tmp"
+    tmp = {name: out / f".{name}.{tag}" for name in writers}
+    old = {name: out / f".{name}.old.{tag}" for name in writers}
+    aside: list[str] = []
+    moved: list[Path] = []
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        for name, write in writers.items():
+            write(tmp[name])
+        for name in writers:
+            if (out / name).exists():
+                os.replace(out / name, old[name])
+                aside.append(name)
+        for name in writers:
+            os.replace(tmp[name], out / name)
+            moved.append(out / name)
+    except OSError:
+        for path in moved:
+            path.unlink(missing_ok=True)
+        for name in aside:
+            with contextlib.suppress(OSError):
+                os.replace(old[name], out / name)
+        _remove(tmp.values())
+        for directory in reversed(created):
+            with contextlib.suppress(OSError):
+                directory.rmdir()
+        raise
+    _remove([*tmp.values(), *old.values()])
+
+
+def _remove(paths: Iterable[Path]) -> None:
+    for path in paths:
+        with contextlib.suppress(OSError):
+            path.unlink(missing_ok=True)

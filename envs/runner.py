@@ -39,7 +39,15 @@ from conesim.sim.progress import PolylineProgress
 from conesim.sim.race_control import line_crossings_along
 from conesim.sim.sensors import Faults, SensorProfile, get_profile
 from conesim.sim.vehicle_params import VehicleParams
-from conesim.tracks import DEFAULT_TRACK, Track, TrackFormatError, load_track
+from conesim.tracks import (
+    DEFAULT_TRACK,
+    GeneratedTrack,
+    Track,
+    TrackFormatError,
+    TrackSource,
+    load_track,
+    track_label,
+)
 
 TIMING_FIELDS = ("wall_time_s", "real_time_factor", "setup_time_s")
 """The fields of ``result.json`` that depend on the machine, not on the run:
@@ -78,10 +86,16 @@ class RunResult:
     trace: RunTrace = field(repr=False, default_factory=RunTrace)
     scenario: dict[str, Any] = field(repr=False, default_factory=dict)
 
+    @property
+    def clean(self) -> bool:
+        """Every lap completed, no cone down or out, no excursion off the track."""
+        return self.finished and self.cones_down_or_out == 0 and self.off_track_events == 0
+
     def to_json(self) -> dict[str, Any]:
-        """The JSON-able result (the trace left out)."""
+        """The JSON-able result (the trace left out; ``clean`` added)."""
         out = asdict(self)
         out.pop("trace")
+        out["clean"] = self.clean
         return out
 
 
@@ -114,7 +128,7 @@ def timed_limit_lap(track: Track) -> float:
 
 
 def run_scenario(
-    track: Scenario | str | os.PathLike[str] = DEFAULT_TRACK,
+    track: Scenario | TrackSource = DEFAULT_TRACK,
     *,
     laps: int | None = None,
     seed: int | None = None,
@@ -134,8 +148,9 @@ def run_scenario(
     """Run one episode of a scenario with the autopilot.
 
     Args:
-        track: a whole ``Scenario``, or a shipped track's name or a track file
-            (then a ``Scenario`` with its defaults: ``conesim run``'s).
+        track: a whole ``Scenario``, or a shipped track's name, a track file
+            or a ``GeneratedTrack`` (then a ``Scenario`` with its defaults:
+            ``conesim run``'s).
         laps, seed, localization, autopilot, time_limit, control_rate,
         physics_rate, faults, ekf, vehicle: replace the scenario's field of
             the same name when given (None: the scenario's). ``seed`` gives
@@ -164,7 +179,7 @@ def run_scenario(
     if bag is not None:
         recorder = BagRecorder(
             bag,
-            {"conesim.track": scenario.track, "conesim.seed": str(scenario.seed),
+            {"conesim.track": scenario.track_name, "conesim.seed": str(scenario.seed),
              "conesim.sensors": scenario.sensors.name,
              "conesim.localization": scenario.localization},
         )  # fmt: skip
@@ -188,9 +203,12 @@ def run_scenario(
     return result
 
 
-def _scenario(track: Scenario | str | os.PathLike[str], **given: Any) -> Scenario:
+def _scenario(track: Scenario | TrackSource, **given: Any) -> Scenario:
     """``track`` as a scenario, with the fields ``given`` (not None) replaced."""
-    scenario = track if isinstance(track, Scenario) else Scenario(track=os.fspath(track))
+    if isinstance(track, Scenario):
+        scenario = track
+    else:
+        scenario = Scenario(track=track if isinstance(track, GeneratedTrack) else os.fspath(track))
     changes = {name: value for name, value in given.items() if value is not None}
     if isinstance(changes.get("sensors"), str):
         changes["sensors"] = get_profile(changes["sensors"])
@@ -198,7 +216,7 @@ def _scenario(track: Scenario | str | os.PathLike[str], **given: Any) -> Scenari
 
 
 @contextmanager
-def _world_build_errors(track: str) -> Iterator[None]:
+def _world_build_errors(track: TrackSource) -> Iterator[None]:
     """Name the track and its start pose when the world cannot be built on it.
 
     Such a failure (the start pose out of the geodesy's range) is the track
@@ -209,7 +227,8 @@ def _world_build_errors(track: str) -> Iterator[None]:
     except GeodesyError as exc:
         pose = load_track(track).start_pose
         raise TrackFormatError(
-            f"cannot build the world at the start pose ({pose.x:g}, {pose.y:g}): {exc}", track
+            f"cannot build the world at the start pose ({pose.x:g}, {pose.y:g}): {exc}",
+            track_label(track),
         ) from None
 
 

@@ -44,7 +44,7 @@ from conesim.planner.autopilot import CONTROL_RATE, default_config
 from conesim.sim.sensors import DEFAULT_PROFILE, Faults, SensorProfile, apply_faults, get_profile
 from conesim.sim.vehicle_params import VehicleParams
 from conesim.sim.world import WorldConfig
-from conesim.tracks import DEFAULT_TRACK, Track
+from conesim.tracks import DEFAULT_TRACK, GeneratedTrack, Track, track_label
 from conesim.tracks.survey import PathSurvey
 
 Localization = Literal["fused", "raw", "truth"]
@@ -62,7 +62,8 @@ class Scenario:
     """One run, completely (see the module docstring).
 
     Attributes:
-        track: a shipped track's name or a track file.
+        track: a shipped track's name, a track file, or a generated track
+            (``GeneratedTrack(seed, TrackSpec(...))``).
         laps: laps to drive, >= 1 [-] (an open lane is one run).
         seed: the episode seed, as ``conesim run --seed`` and ``env.reset(seed=)``.
         time_limit: truncation time [s]; None: 60 s per lap plus 30 s.
@@ -82,7 +83,7 @@ class Scenario:
             track's (``tracks.survey.PathSurvey``: per-point noise, a bias).
     """
 
-    track: str = DEFAULT_TRACK
+    track: str | GeneratedTrack = DEFAULT_TRACK
     laps: int = 1
     seed: int = 0
     time_limit: float | None = None  # [s]
@@ -101,9 +102,13 @@ class Scenario:
 
     def __post_init__(self) -> None:
         track = self.track
-        if not (isinstance(track, str | os.PathLike) and os.fspath(track).strip()):
-            raise ValueError(f"Scenario.track = {track!r}: give a shipped track name or a file")
-        object.__setattr__(self, "track", os.fspath(track))
+        if not isinstance(track, GeneratedTrack):
+            if not (isinstance(track, str | os.PathLike) and os.fspath(track).strip()):
+                raise ValueError(
+                    f"Scenario.track = {track!r}: give a shipped track name or a file "
+                    "(or a GeneratedTrack)"
+                )
+            object.__setattr__(self, "track", os.fspath(track))
         if isinstance(self.laps, bool) or not (isinstance(self.laps, int) and self.laps >= 1):
             raise ValueError(f"Scenario.laps = {self.laps!r} is out of range: allowed >= 1")
         if isinstance(self.seed, bool) or not (
@@ -159,6 +164,11 @@ class Scenario:
                 )
 
     @property
+    def track_name(self) -> str:
+        """The track as messages name it (a generated one by its name)."""
+        return track_label(self.track)
+
+    @property
     def rules(self) -> EpisodeRules:
         """When the episode ends."""
         return EpisodeRules(
@@ -206,14 +216,20 @@ class Scenario:
             autopilot=self.autopilot_config(),
         )
 
-    def closed_loop(self, track: Track, driver: DriverFactory | None = None) -> ClosedLoop:
-        """The closed loop of this scenario on ``track`` (loaded from ``self.track``)."""
+    def closed_loop(
+        self,
+        track: Track,
+        driver: DriverFactory | None = None,
+        rules: EpisodeRules | None = None,
+    ) -> ClosedLoop:
+        """The closed loop of this scenario on ``track`` (loaded from ``self.track``);
+        ``rules`` replace the scenario's (the env's stuck rule and its grace)."""
         return ClosedLoop(
             track,
             self.world_config(),
             localization=self.localization,
             control_rate=self.control_rate,
-            rules=self.rules,
+            rules=rules or self.rules,
             driver=driver,
             ekf=self.ekf_config(),
             survey=self.global_path,

@@ -3,7 +3,8 @@
 The format (version 1; every key optional, the defaults are ``conesim run``'s)::
 
     conesim_scenario: 1
-    track: trackdrive          # a shipped track, or a file (relative to this file)
+    track: trackdrive          # a shipped track, or a file (relative to this file),
+                               # or {generate: {seed: 3, size: small, ...}} (TrackSpec)
     laps: 1
     seed: 0
     time_limit: null           # [s]; null: 60 s per lap + 30 s
@@ -60,7 +61,7 @@ from conesim.planner import AutopilotConfig
 from conesim.planner.autopilot import default_config
 from conesim.sim.sensors import DEFAULT_PROFILE, PROFILES, Faults, SensorProfile, get_profile
 from conesim.sim.vehicle_params import VehicleParams
-from conesim.tracks import shipped_tracks
+from conesim.tracks import GeneratedTrack, TrackSpec, shipped_tracks
 from conesim.tracks.survey import PathSurvey
 
 FORMAT_KEY = "conesim_scenario"
@@ -197,7 +198,11 @@ def _scenario(data: dict[str, Any]) -> Scenario:
     for key in SHORTHAND:
         _expand(data, key)
     hints = typing.get_type_hints(Scenario)
-    values: dict[str, Any] = {k: convert(data[k], hints[k], (k,)) for k in SCALARS if k in data}
+    values: dict[str, Any] = {
+        k: convert(data[k], hints[k], (k,)) for k in SCALARS if k in data and k != "track"
+    }
+    if "track" in data:
+        values["track"] = track_from_data(data["track"])
     localization = values.get("localization", "fused")
     base, sensors = _sensors(data.get("sensors"))
     values["sensors"] = sensors
@@ -218,6 +223,55 @@ def _scenario(data: dict[str, Any]) -> Scenario:
         given = [word for word in named if word in data]
         path = (given or named)[:1]
         raise FieldError(tuple(path), reason) from None
+
+
+GENERATE_KEY = "generate"
+
+
+def track_from_data(value: Any, path: Path = ("track",)) -> str | GeneratedTrack:
+    """A scenario's ``track``: a name or file (text), or ``{generate: {seed: S, ...}}``
+    with any ``TrackSpec`` field beside the seed (``GeneratedTrack``).
+
+    Raises:
+        FieldError: another type, unknown keys, or a setting out of range.
+    """
+    if isinstance(value, GeneratedTrack):
+        return value
+    if isinstance(value, str):
+        return convert(value, str, path)
+    if not isinstance(value, Mapping):
+        raise FieldError(
+            path, f"expected a track name, a file or {{{GENERATE_KEY}: {{seed: S, ...}}}}, "
+            f"got {value!r}",
+        )  # fmt: skip
+    for key in value:
+        if key != GENERATE_KEY:
+            raise FieldError((*path, key), f"unknown key {key!r}; allowed keys: {GENERATE_KEY}")
+    where = (*path, GENERATE_KEY)
+    settings = value.get(GENERATE_KEY)
+    if settings is None:
+        settings = {}
+    if not isinstance(settings, Mapping):
+        raise FieldError(where, f"expected a mapping of generator settings, got {settings!r}")
+    allowed = ["seed", *settable(TrackSpec)]
+    for key in settings:
+        if key not in allowed:
+            raise FieldError(
+                (*where, key), f"unknown key {key!r}; allowed keys: {', '.join(allowed)}"
+            )
+    seed = convert(settings.get("seed", 0), int, (*where, "seed"))
+    spec = build(TrackSpec, {k: v for k, v in settings.items() if k != "seed"}, path=where)
+    try:
+        return GeneratedTrack(seed, spec)
+    except ValueError as exc:
+        raise FieldError((*where, "seed"), str(exc)) from None
+
+
+def track_to_data(track: str | GeneratedTrack) -> Any:
+    """``track_from_data``'s inverse: every generator setting written out."""
+    if isinstance(track, GeneratedTrack):
+        return {GENERATE_KEY: {"seed": track.seed, **plain(track.spec)}}
+    return track
 
 
 def _group(value: Any, name: str, head: str, allowed: list[str]) -> tuple[Any, dict[str, Any]]:
@@ -283,12 +337,30 @@ def _autopilot(value: Any, localization: str) -> AutopilotConfig | None:
     return build(AutopilotConfig, rest, base=start, path=("autopilot",), hidden=HIDDEN)
 
 
-def _absolute(track: Any, base_dir: str) -> Any:
+def absolute_track(track: Any, base_dir: str) -> Any:
     """A track file's path made absolute, relative to ``base_dir`` (a name stays one)."""
     if not isinstance(track, str) or track in shipped_tracks() or os.path.isabs(track):
         return track
     candidate = os.path.join(base_dir, track)
     return os.path.abspath(candidate) if os.path.exists(candidate) else track
+
+
+def read_scenario_file(path: str | os.PathLike[str]) -> tuple[Any, Lines]:
+    """A scenario file's mapping, its track made absolute (relative to the file), and its lines.
+
+    Raises:
+        FieldError: the file cannot be read, or is not valid YAML.
+    """
+    data, lines = read_yaml(path)
+    if isinstance(data, dict) and "track" in data:
+        data["track"] = absolute_track(data["track"], os.path.dirname(os.fspath(path)))
+    return data, lines
+
+
+def with_absolute_track(scenario: Scenario, base_dir: str = os.curdir) -> Scenario:
+    """``scenario`` with a relative track file's path made absolute from ``base_dir``."""
+    track = absolute_track(scenario.track, base_dir)
+    return scenario if track == scenario.track else dataclasses.replace(scenario, track=track)
 
 
 def load_scenario(
@@ -311,12 +383,8 @@ def load_scenario(
     source = None
     if path is not None:
         source = os.fspath(path)
-        data, lines = read_yaml(path)
-        if isinstance(data, dict) and "track" in data:
-            data["track"] = _absolute(data["track"], os.path.dirname(source))
-    scenario = scenario_from_mapping(data, overrides, source=source, lines=lines)
-    track = _absolute(scenario.track, os.curdir)
-    return scenario if track == scenario.track else dataclasses.replace(scenario, track=track)
+        data, lines = read_scenario_file(path)
+    return with_absolute_track(scenario_from_mapping(data, overrides, source=source, lines=lines))
 
 
 def scenario_to_mapping(scenario: Scenario) -> dict[str, Any]:
@@ -324,6 +392,7 @@ def scenario_to_mapping(scenario: Scenario) -> dict[str, Any]:
     full = scenario.resolved()
     out: dict[str, Any] = {FORMAT_KEY: FORMAT_VERSION}
     out.update({key: plain(getattr(full, key)) for key in SCALARS})
+    out["track"] = track_to_data(full.track)  # in its place: the order of SCALARS
     name = full.sensors.name
     out["sensors"] = {"profile": name if name in PROFILES else DEFAULT_PROFILE}
     out["sensors"].update(plain(full.sensors))

@@ -132,8 +132,16 @@ def _represent_list(dumper: yaml.SafeDumper, items: list[Any]) -> yaml.Node:
 _Dumper.add_representer(list, _represent_list)
 
 
-def dump_yaml(data: Any) -> str:
-    """Plain data as YAML text that ``parse_yaml`` reads back as the same data."""
+def dump_yaml(data: Any, *, flow: bool = False) -> str:
+    """Plain data as YAML text that ``parse_yaml`` reads back as the same data.
+
+    ``flow``: on one line (``{generate: {seed: 3}}``), for labels.
+    """
     return yaml.dump(
-        data, Dumper=_Dumper, sort_keys=False, default_flow_style=False, allow_unicode=True
+        data,
+        Dumper=yaml.SafeDumper if flow else _Dumper,
+        sort_keys=False,
+        default_flow_style=flow,
+        allow_unicode=True,
+        width=10**9 if flow else 80,
     )

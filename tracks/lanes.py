@@ -2,8 +2,9 @@
 
 Steps (``lane_geometry``):
 
-1. ``order_side``: order the blue and the yellow cones (ordering.py) and
-   orient them the same way round.
+1. ``unique_cones``: a cone listed twice (a layout that repeats its first
+   cone to close the loop) is one cone; ``order_side``: order the blue and
+   the yellow cones (ordering.py) and orient them the same way round.
 2. a provisional centreline between them (midline.py).
 3. ``driving_reversed``: the driving direction is the start pose's heading;
    without a start pose, the direction that puts the blue cones on the left.
@@ -12,6 +13,10 @@ Steps (``lane_geometry``):
    big orange cones close the gap they leave in a loop's boundaries, and the
    orange braking zone extends the acceleration lane. Orange cones elsewhere
    (e.g. the fssim acceleration's end-of-lane cone on the centreline) do not.
+   In a loop they are markers on the lane's edge, not its shape
+   (``onto_edge``): one standing off the edge drawn through the blue (or
+   yellow) cones, as a start gate wider than the lane does, joins it at its
+   nearest point of that edge, so the edge does not kink out to it.
 5. the final centreline, resampled every 0.5 m from the start/finish line
    (a loop) or from the lane's start (open), and the widths: distance to the
    left plus distance to the right boundary spline.
@@ -21,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
 from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
@@ -36,6 +42,8 @@ FloatArray = NDArray[np.float64]
 CENTRELINE_SPACING = 0.5  # [m] spacing of Track.centreline
 MIN_SIDE_CONES = 3  # a boundary needs at least this many cones
 SIDE_TOLERANCE = 0.5  # an orange cone joins a side within this fraction of the half-width
+ON_EDGE_M = 0.05  # [m] an orange cone this close to a loop's edge is on it, as it stands
+DUPLICATE_M = 0.1  # [m] cones of one side closer than this are one cone listed twice
 LANE_END_FINISH_M = 1.0  # [m] an open lane without a finish line finishes this far before its end
 
 
@@ -56,7 +64,8 @@ def lane_geometry(
             which no centreline can be derived.
     """
     kind = np.array([str(k) for k in kinds])
-    blue, yellow = cones[kind == ConeKind.BLUE], cones[kind == ConeKind.YELLOW]
+    blue = unique_cones(cones[kind == ConeKind.BLUE])
+    yellow = unique_cones(cones[kind == ConeKind.YELLOW])
     if len(blue) < MIN_SIDE_CONES or len(yellow) < MIN_SIDE_CONES:
         raise TrackGeometryError(
             f"a track needs at least {MIN_SIDE_CONES} blue (left) and {MIN_SIDE_CONES} "
@@ -71,11 +80,33 @@ def lane_geometry(
     orange = cones[(kind == ConeKind.ORANGE) | (kind == ConeKind.BIG_ORANGE)]
     if len(orange):
         on_left, on_right = assign_sides(orange, mid)
+        if closed:
+            on_left, on_right = onto_edge(on_left, mid.left), onto_edge(on_right, mid.right)
         left = orient_like(order_side(np.vstack([blue, on_left]), closed), mid)
         right = align_to(order_side(np.vstack([yellow, on_right]), closed), left, closed)
         mid = centreline_between(left, right, closed)
     lines = _timing_lines(cones[kind == ConeKind.BIG_ORANGE], mid, start_pose)
     return _finish(mid, left, right, lines)
+
+
+def unique_cones(points: FloatArray) -> FloatArray:
+    """The cones (n, 2) [m] without repeats: of cones closer than ``DUPLICATE_M``
+    to an earlier one, only the earlier is kept."""
+    pairs = cKDTree(points).query_pairs(DUPLICATE_M, output_type="ndarray")
+    if len(pairs) == 0:
+        return points
+    keep = np.ones(len(points), dtype=bool)
+    keep[np.max(pairs, axis=1)] = False
+    return points[keep]
+
+
+def onto_edge(markers: FloatArray, edge: FloatArray) -> FloatArray:
+    """Marker cones (k, 2) [m] moved to their nearest point of the dense ``edge`` (p, 2)
+    [m], those farther than ``ON_EDGE_M`` from it; those on it stay as they stand."""
+    if len(markers) == 0:
+        return markers
+    distance, nearest = cKDTree(edge).query(markers)
+    return np.where((distance > ON_EDGE_M)[:, None], edge[nearest], markers)
 
 
 def order_side(points: FloatArray, closed: bool) -> FloatArray:

@@ -16,6 +16,7 @@ from importlib.resources import as_file, files
 from pathlib import Path
 
 from conesim.tracks.errors import TrackNotFoundError
+from conesim.tracks.generate import GeneratedTrack, generate_track
 from conesim.tracks.model import Track
 from conesim.tracks.readers import read_track
 
@@ -76,17 +77,25 @@ def shipped_track_path(name: str) -> Path:
     return shipped_data_dir() / (name + _SUFFIX)
 
 
-def load_track(name_or_path: str | os.PathLike[str]) -> Track:
-    """A shipped track by name (e.g. ``"autocross"``) or a track file by path.
+TrackSource = str | os.PathLike[str] | GeneratedTrack
+"""What names a track: a shipped track's name, a track file, or a generated track."""
+
+
+def load_track(name_or_path: TrackSource) -> Track:
+    """A shipped track by name (e.g. ``"autocross"``), a track file by path, or a
+    generated track (``GeneratedTrack(seed, spec)``).
 
     A string that is a shipped track's name loads that track; anything else
     is read as a file path (any supported format, see `read_track`).
 
     Raises:
+        TrackGenerationError: a generated track that cannot be made.
         TrackFormatError: the file is not a valid track. Its subclass
             TrackNotFoundError: neither a shipped name nor an existing file
             (the message lists the shipped names).
     """
+    if isinstance(name_or_path, GeneratedTrack):
+        return _generated(name_or_path)
     if isinstance(name_or_path, str) and name_or_path in shipped_tracks():
         return _load_shipped(name_or_path)
     path = Path(name_or_path)
@@ -102,3 +111,16 @@ def load_track(name_or_path: str | os.PathLike[str]) -> Track:
 def _load_shipped(name: str) -> Track:
     """Shipped tracks are immutable data: read and derive each once per process."""
     return read_track(shipped_track_path(name))
+
+
+@cache
+def _generated(recipe: GeneratedTrack) -> Track:
+    """Generated tracks are deterministic: make each once per process."""
+    return generate_track(recipe.seed, recipe.spec)
+
+
+def track_label(source: TrackSource) -> str:
+    """How messages name a track: its name, its file, or the generated track's name."""
+    if isinstance(source, GeneratedTrack):
+        return source.name
+    return os.fspath(source)

@@ -11,7 +11,7 @@ from gymnasium.utils.env_checker import check_env
 from numpy.testing import assert_allclose
 
 from conesim import envs
-from conesim.envs.cone_track_env import ConeTrackEnv
+from conesim.envs.cone_track_env import END_REASONS, ConeTrackEnv
 from conesim.envs.config import EnvConfig
 from conesim.envs.expert import AutopilotExpert
 from conesim.planner import AutopilotConfig
@@ -40,7 +40,7 @@ def test_gymnasium_check_env_with_render(observation: str, monkeypatch: pytest.M
 
 def rollout(seed: int, steps: int = 150) -> list[tuple[bytes, float, str]]:
     """Observations, rewards and info summaries of a fixed-action rollout."""
-    env = ConeTrackEnv()
+    env = ConeTrackEnv(info="full")
     obs, info = env.reset(seed=seed)
     out = [(obs.tobytes(), 0.0, repr(info["truth"]))]
     for k in range(steps):
@@ -59,11 +59,21 @@ def test_same_seed_same_rollout_bit_for_bit() -> None:
 
 
 def test_action_mapping_to_vehicle_limits() -> None:
-    """[1, 1] is full left lock and +3 m/s^2; [-1, -1] full right and -10 m/s^2."""
+    """Centred: [1, 1] is full left lock and +3 m/s^2, [-1, -1] full right and
+    -3 m/s^2, beyond the box clipped; physical: radians and m/s^2, down to -10."""
     env = ConeTrackEnv()
     assert_allclose(env.action_to_command(np.array([1.0, 1.0])), (0.47, 3.0))
-    assert_allclose(env.action_to_command(np.array([-1.0, -1.0])), (-0.47, -10.0))
-    assert_allclose(env.command_to_action(0.235, -5.0), [0.5, -0.5])
+    assert_allclose(env.action_to_command(np.array([-1.0, -1.0])), (-0.47, -3.0))
+    assert_allclose(env.action_to_command(np.array([0.0, 0.0])), (0.0, 0.0))
+    assert_allclose(env.action_to_command(np.array([2.0, -7.0])), (0.47, -3.0))
+    assert_allclose(env.command_to_action(0.235, -1.5), [0.5, -0.5])
+    assert env.brake_limit == 3.0
+    physical = ConeTrackEnv(action="physical")
+    assert_allclose(physical.action_space.low, [-0.47, -10.0])
+    assert_allclose(physical.action_space.high, [0.47, 3.0])
+    assert_allclose(physical.action_to_command(np.array([0.2, -12.0])), (0.2, -10.0), rtol=1e-6)
+    assert_allclose(physical.command_to_action(0.1, -5.0), [0.1, -5.0])
+    assert physical.brake_limit == 10.0
     env.reset(seed=0)
     with pytest.raises(ValueError, match="finite"):
         env.step(np.array([np.nan, 0.0], dtype=np.float32))
@@ -92,8 +102,8 @@ def test_off_track_terminates_with_penalty() -> None:
         _, _, terminated, truncated, info = env.step(np.array([1.0, 0.6], dtype=np.float32))
         if terminated or truncated:
             break
-    assert terminated and info["end_reason"] == "off_track"
-    assert info["reward_terms"]["off_track"] == -100.0
+    assert terminated and END_REASONS[info["end_reason"]] == "off_track"
+    assert info["reward_terms"]["off_track"] == -10.0
 
 
 def test_reset_options_and_bad_config() -> None:
@@ -121,7 +131,7 @@ def test_time_limit_truncates() -> None:
         steps += 1
         if truncated or terminated or steps > 100:
             break
-    assert steps == 50 and not terminated and info["end_reason"] == "time_limit"
+    assert steps == 50 and not terminated and END_REASONS[info["end_reason"]] == "time_limit"
 
 
 @pytest.mark.parametrize("mode", ["sync", "async"])
@@ -130,7 +140,7 @@ def test_make_vec(mode: str) -> None:
     vec = gym.make_vec(envs.ENV_ID, num_envs=2, vectorization_mode=mode, sensors="ideal")
     try:
         obs, _ = vec.reset(seed=[1, 2])
-        assert obs.shape == (2, 6 + 3 * 32)
+        assert obs.shape == (2, 8 + 5 * 32)
         for _ in range(5):
             obs, reward, _, _, _ = vec.step(np.zeros((2, 2), dtype=np.float32))
         assert reward.shape == (2,)
@@ -151,7 +161,7 @@ def test_info_has_one_shape_from_reset_to_every_step(localization: str) -> None:
     """Every info key keeps its type from reset() on (gymnasium's vector envs
     stack them key by key); before the first broadcast the localization error
     is inf, not None."""
-    env = ConeTrackEnv(track="acceleration", localization=localization)
+    env = ConeTrackEnv(track="acceleration", localization=localization, info="full")
     _, info = env.reset(seed=0)
     shape = _shape_of(info)
     if localization != "truth":  # truth broadcasts at t = 0
@@ -168,8 +178,8 @@ def test_vector_env_with_episodes_ending_apart() -> None:
     gymnasium's info stacking when the fresh one's localization error was None)."""
     vec = gym.vector.SyncVectorEnv(
         [
-            lambda: gym.make(envs.ENV_ID, track="acceleration", time_limit=0.1),
-            lambda: gym.make(envs.ENV_ID, track="acceleration", time_limit=1.0),
+            lambda: gym.make(envs.ENV_ID, track="acceleration", time_limit=0.1, info="full"),
+            lambda: gym.make(envs.ENV_ID, track="acceleration", time_limit=1.0, info="full"),
         ]
     )
     try:
@@ -247,15 +257,15 @@ def test_env_time_limit_comes_before_the_registered_step_cap() -> None:
         steps += 1
         if terminated or truncated:
             break
-    # Standing still: stuck after 5 s ends it (terminated), long before any cap.
-    assert info["end_reason"] == "stuck" and steps == 50
+    # Standing still: stuck at the 15 s grace ends it (terminated), long before any cap.
+    assert END_REASONS[info["end_reason"]] == "stuck" and steps == 150
     env.close()
 
 
 def test_localization_error_in_every_mode() -> None:
     """info carries the broadcast pose error in raw, fused and truth modes."""
     for mode in ("raw", "fused", "truth"):
-        env = ConeTrackEnv(localization=mode)
+        env = ConeTrackEnv(localization=mode, info="full")
         env.reset(seed=0)
         for _ in range(20):
             _, _, _, _, info = env.step(np.array([0.0, 0.5], dtype=np.float32))
@@ -269,7 +279,7 @@ def test_autopilot_expert_drives_raw_localization_cautiously() -> None:
     lateral with no downforce share, in the plan and the command's ellipse,
     6 m/s^2 braking, 15 m/s) in an episode with raw localization, also when a reset
     option picks it; settings given to the expert are kept."""
-    env = ConeTrackEnv(track="autocross")
+    env = ConeTrackEnv(track="autocross", action="physical")
     _, info = env.reset(seed=0)
     expert = AutopilotExpert(env)
     expert.reset(info)
@@ -295,7 +305,7 @@ def test_autopilot_expert_completes_a_lap_through_the_env() -> None:
     same seed (the env's float32 actions round its commands)."""
     from conesim.envs.runner import run_scenario
 
-    env = ConeTrackEnv(track="acceleration", sensors="ideal")
+    env = ConeTrackEnv(track="acceleration", sensors="ideal", action="physical")
     _, info = env.reset(seed=4)
     expert = AutopilotExpert(env)
     action = expert.reset(info)
@@ -304,26 +314,34 @@ def test_autopilot_expert_completes_a_lap_through_the_env() -> None:
         if terminated or truncated:
             break
         action = expert(info)
-    assert info["end_reason"] == "laps_completed"
+    assert END_REASONS[info["end_reason"]] == "laps_completed"
     assert info["cones_down_or_out"] == 0 and info["off_track_events"] == 0
     assert expert.output is not None  # the step before the last (the last one ended it)
     assert expert.output.command.stamp == pytest.approx(info["t"] - 1.0 / env.config.control_rate)
     direct = run_scenario("acceleration", sensors="ideal", seed=4)
-    assert direct.lap_times_s[0] == pytest.approx(info["lap_times"][0], rel=0.01)
+    assert direct.lap_times_s[0] == pytest.approx(info["lap_time"], rel=0.01)
 
 
 def test_uncertainty_before_the_filter_has_an_estimate() -> None:
-    """Vector mode: pos_std and yaw_std are their bounds (1000 m, pi) until the
-    EKF initialises, then its 1-sigma figures; 0 in truth and raw mode."""
-    env = ConeTrackEnv(localization="fused")
+    """Dict mode: pos_std and yaw_std are their bounds (1000 m, pi) until the
+    EKF initialises, then its 1-sigma figures; 0 in truth and raw mode. The
+    vector mode says the same with its validity flag, the uncertainties 0."""
+    env = ConeTrackEnv(localization="fused", observation="dict")
     obs, _ = env.reset(seed=0)
-    assert_allclose(obs[4:6], [1e3, math.pi], rtol=1e-6)
+    assert_allclose(obs["ego"][4:6], [1e3, math.pi], rtol=1e-6)
     while env.loop.localizer.estimate(env.loop.time) is None:
         obs, _, _, _, _ = env.step(np.zeros(2, dtype=np.float32))
-    assert 0.0 < obs[4] < 0.1 and 0.0 < obs[5] < 0.1
+    assert 0.0 < obs["ego"][4] < 0.1 and 0.0 < obs["ego"][5] < 0.1
     for mode in ("truth", "raw"):
-        obs, _ = ConeTrackEnv(localization=mode).reset(seed=0)
-        assert_allclose(obs[4:6], [0.0, 0.0])
+        obs, _ = ConeTrackEnv(localization=mode, observation="dict").reset(seed=0)
+        assert_allclose(obs["ego"][4:6], [0.0, 0.0])
+    vec = ConeTrackEnv(localization="fused")
+    obs, _ = vec.reset(seed=0)
+    assert_allclose(obs[4:7], [0.0, 0.0, 0.0])  # pose_valid, pos_std, yaw_std
+    while vec.loop.localizer.estimate(vec.loop.time) is None:
+        obs, _, _, _, _ = vec.step(np.zeros(2, dtype=np.float32))
+    # rtk: 1-sigma of a few cm (/ 1 m) and a few mrad (/ 0.1 rad)
+    assert obs[4] == 1.0 and 0.0 < obs[5] < 0.1 and 0.0 < obs[6] < 0.5
 
 
 def test_dict_pose_in_every_localization_mode() -> None:

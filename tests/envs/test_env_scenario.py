@@ -100,7 +100,7 @@ def test_bad_parts_are_refused_naming_them(kwargs: dict[str, Any], message: str)
 
 def test_the_env_default_autopilot_stays_the_localizations() -> None:
     """Without a scenario's autopilot the expert drives the runner's default."""
-    env = gym.make(envs.ENV_ID, localization="raw", time_limit=1.0)
+    env = gym.make(envs.ENV_ID, localization="raw", time_limit=1.0, action="physical")
     _, info = env.reset(seed=0)
     expert = AutopilotExpert(env)
     expert.reset(info)

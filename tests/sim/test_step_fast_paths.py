@@ -11,7 +11,7 @@ import pytest
 from conesim.core.messages import ConeDetections, Header
 from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
-from conesim.envs.observation import SensorMemory, build_observation
+from conesim.envs.observation import SensorMemory, build_dict, build_vector
 from conesim.sim.progress import PolylineProgress
 from conesim.sim.sensors.profiles import get_profile
 from conesim.sim.sensors.suite import SensorSuite
@@ -98,24 +98,28 @@ def test_suite_early_return_changes_nothing() -> None:
 
 
 def test_observation_cone_block_follows_the_detection() -> None:
+    """The cached cone blocks of both modes follow the detection and are not
+    changed through what a caller was handed (vector mode: / 10 m, blue +1)."""
     memory = SensorMemory()
-    action = np.zeros(2, dtype=np.float32)
-    empty = build_observation(memory, None, action, 4, "vector", now=1.0)
+    command = (0.0, 0.0)
+    empty = build_vector(memory, None, command, 4, 10.0, pose_valid=False, now=1.0)
     det = ConeDetections(
         Header(0.1, "os_sensor"), np.array([[1.0, 2.0, 0.0], [3.0, -1.0, 0.0]]), ("blue", "yellow")
     )
     memory.update([det])
-    first = build_observation(memory, None, action, 4, "dict", now=1.0)
-    assert isinstance(first, dict)
+    first = build_dict(memory, None, command, 4, now=1.0)
     assert first["cone_mask"].tolist() == [1.0, 1.0, 0.0, 0.0]
     first["cones"][:] = 99.0  # the caller's copy, not the cached block
-    again = build_observation(memory, None, action, 4, "dict", now=1.0)
-    assert isinstance(again, dict)
+    again = build_dict(memory, None, command, 4, now=1.0)
     assert again["cones"][:2].tolist() == [[1.0, 2.0], [3.0, -1.0]]
-    vec = build_observation(memory, None, action, 4, "vector", now=1.0)
-    assert vec[6:12].tolist() == [1.0, 2.0, 1.0, 3.0, -1.0, 1.0]
+    vec = build_vector(memory, None, command, 4, 10.0, pose_valid=False, now=1.0)
+    expected = [0.1, 0.2, 1.0, 1.0, 0.0, 0.3, -0.1, 1.0, -1.0, 0.0]
+    assert vec[8:18].tolist() == pytest.approx(expected)
+    vec[8:] = 99.0
+    assert build_vector(memory, None, command, 4, 10.0, pose_valid=False, now=1.0)[8] != 99.0
     memory.update([ConeDetections(Header(0.2, "os_sensor"), np.zeros((0, 3)), ())])
-    assert build_observation(memory, None, action, 4, "vector", now=1.0).tolist() == empty.tolist()
+    later = build_vector(memory, None, command, 4, 10.0, pose_valid=False, now=1.0)
+    assert later[8:].tolist() == empty[8:].tolist()
 
 
 def test_gps_scalar_conversion_is_the_library_one() -> None:

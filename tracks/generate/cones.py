@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.ndimage import maximum_filter1d
 
 FloatArray = NDArray[np.float64]
 
@@ -34,15 +35,20 @@ def place_cones(
     edge_kappa: FloatArray,
     min_spacing: float = MIN_SPACING,
     max_spacing: float = MAX_SPACING,
+    window: int = 1,
 ) -> FloatArray:
     """Cones along a closed edge (n, 2) [m], starting at its first point.
 
     The cone density 1/spacing is integrated along the edge and the cones
     stand at equal steps of it, so that spacing follows the curvature
-    ``edge_kappa`` (n,) [1/m] and the last gap equals its neighbours.
+    ``edge_kappa`` (n,) [1/m] and the last gap equals its neighbours. With
+    ``window`` > 1 samples, the spacing follows the tightest curvature
+    within the window around each point: an S-bend's cones stay close
+    through its change of direction, where the curvature passes zero.
     """
     seg = np.hypot(*np.diff(np.vstack([edge, edge[:1]]), axis=0).T)
-    radius = 1.0 / np.maximum(np.abs(edge_kappa), 1e-6)
+    tightest = maximum_filter1d(np.abs(edge_kappa), window, mode="wrap")
+    radius = 1.0 / np.maximum(tightest, 1e-6)
     density = 1.0 / cone_spacing(radius, min_spacing, max_spacing)
     cum = np.concatenate([[0.0], np.cumsum(density * seg)])
     count = math.ceil(cum[-1])

@@ -69,7 +69,7 @@ def loop_from_segments(
     """A closed track of ``segments``, ``width`` [m] wide, its gate ``gate_offset`` [m]
     outside the lane's edges, the line ``LINE_AT`` into the first segment."""
     loop = loop_centreline(segments, LINE_AT)
-    cones, kinds = loop_cones(loop, width, gate_offset)
+    cones, kinds = loop_cones(loop, width, gate_offset=gate_offset)
     return Track(name, cones, kinds, start_pose(loop), Layout.CLOSED, description=description)
 
 

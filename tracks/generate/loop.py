@@ -69,16 +69,20 @@ def loop_centreline(segments: Sequence[Segment], line_at: float) -> LoopCentreli
 def loop_cones(
     loop: LoopCentreline,
     width: float,
+    *,
     gate_offset: float = 0.0,
     min_spacing: float = MIN_SPACING,
     max_spacing: float = MAX_SPACING,
+    spacing_window: float = 0.0,
 ) -> tuple[FloatArray, tuple[ConeKind, ...]]:
     """The cones (n, 2) [m] and kinds of a loop ``width`` [m] wide.
 
     The big orange cones stand ``gate_offset`` [m] outside the edges at the
     line; on the edge (closer than ``GATE_ON_EDGE``), the edge's own cone on
-    the line gives way to them.
+    the line gives way to them. Spacing follows the tightest curvature
+    within ``spacing_window`` [m] (0: the local one; ``place_cones``).
     """
+    window = max(1, round(spacing_window / STEP))
     points, heading, kappa = loop.points, loop.heading, loop.curvature
     normal = np.column_stack([-np.sin(heading), np.cos(heading)])
     gate = gate_cones(points[0], float(heading[0]), width / 2, gate_offset)
@@ -86,7 +90,8 @@ def loop_cones(
     for sign, kind, big in ((1.0, ConeKind.BLUE, gate[:2]), (-1.0, ConeKind.YELLOW, gate[2:])):
         offset = sign * width / 2
         edge = points + offset * normal
-        placed = place_cones(edge, kappa / (1.0 - kappa * offset), min_spacing, max_spacing)
+        edge_kappa = kappa / (1.0 - kappa * offset)
+        placed = place_cones(edge, edge_kappa, min_spacing, max_spacing, window)
         if gate_offset < GATE_ON_EDGE:
             placed = placed[1:]  # the cone on the line gives way to the big orange ones
         cones += [placed, big]
