@@ -407,7 +407,8 @@ def format_result(
         ("laps", f"{result.laps_completed}/{result.laps}: {laps}"),
         (
             "limit lap",
-            f"{result.limit_lap_time_s:.2f} s (best lap {best})",
+            f"{result.limit_lap_time_s:.2f} s (best lap {best}); "
+            f"centreline {result.centreline_lap_time_s:.2f} s",
         ),
         ("cones hit / DOO", f"{result.cones_hit} / {result.cones_down_or_out}"),
         ("off-track events", str(result.off_track_events)),

@@ -1,45 +1,73 @@
-"""The friction-limited lap time along the true centreline: the yardstick.
+"""The yardstick: the fastest lap of this car on a racing line inside the track.
 
 A quasi-steady-state (QSS) lap simulation, the standard first estimate of a
 car's lap time in vehicle dynamics (e.g. Milliken & Milliken, "Race Car
-Vehicle Dynamics", ch. 2): the car follows the centreline, at every point as
-fast as the tyres allow, accelerating and braking at the car's limits in
-between. Hand-written because no maintained Python package does a QSS lap for
-a given path and car (the open lap-time simulators are MATLAB, or full
+Vehicle Dynamics", ch. 2): the car follows a line (the racing line, or the
+centreline for the figure beside it), at every point as fast as the tyres
+allow, accelerating and braking at the car's limits in between.
+Hand-written because no maintained Python package does a QSS lap for a
+given path and car (the open lap-time simulators are MATLAB, or full
 optimal-control stacks); it is three array passes.
 
-For the ``VehicleParams`` car (the same limits the simulated car has):
+For the ``VehicleParams`` car, with the limits the simulated car has
+(``envs.traction.AxleLimits``: each axle's friction ellipse on its load,
+with the load transfer, the drive and brake splits and the downforce of
+``sim.vehicle_dynamics``):
 
-* grip: ``a_max(v) = mu * D * (g + 0.5 rho ClA v^2 / m)`` (the Pacejka peak on
-  the static plus aerodynamic load);
-* cornering speed: ``v^2 |kappa| = a_max(v)``, so
-  ``v_corner = sqrt(mu D g / (|kappa| - mu D 0.5 rho ClA / m))`` (unbounded when the
-  downforce grows faster than the curvature needs: capped at the top speed);
-* forward pass: ``dv^2/ds = 2 a_x`` with ``a_x = min(max_accel, (min(F_max, P / v) -
-  F_drag - F_roll) / m)`` inside the friction ellipse
-  ``a_x <= a_max sqrt(1 - (v^2 kappa / a_max)^2)``;
-* backward pass: the same with ``max_decel``.
+* cornering speed: the largest speed at which both axles hold the turn,
+  ``v^2 |kappa| = mu D (g + 0.5 rho ClA v^2 / m)`` for the defaults (the
+  Pacejka peak on the static plus aerodynamic load; capped at the top speed
+  where the downforce grows faster than the curvature needs);
+* forward pass: ``dv^2/ds = 2 a_x`` with a_x the largest acceleration the
+  demand limit (``max_accel``), the motor (``min(F_max, P / v)`` less drag
+  and rolling resistance on the static plus aerodynamic load) and both
+  axles' ellipses allow beside the corner's lateral force;
+* backward pass: the same with ``max_decel`` and the brake split: braking
+  into a corner, the unloaded rear axle runs out of grip first.
 
-A loop is a flying lap (the passes run twice around so the speed at the line
-is periodic); the simulated car's first lap includes a standing start, so
+A loop is a flying lap (the passes start at its slowest corner, so the
+speed at the line is periodic); the simulated car's first lap includes a standing start, so
 compare against its best lap. An open lane (acceleration) starts from rest
 where the car starts and is timed between its two timing lines, as the
 simulated run is.
+
+**The limit of a track** (``track_lap_limit``): a loop's, and the skidpad's
+timed circle's, is the fastest of the lines ``envs.racing_line`` offers, the
+blends ``BLENDS`` of its minimum-curvature line with its shortest path (and
+``BLEND_REFINE`` either side of the fastest of them), all inside the cones
+less half the car's width and ``racing_line.MARGIN_M``, each timed by the
+QSS above; never slower than the centreline (where no line beats it, or
+none can be found, the limit is the centreline's, with a warning in the
+latter case). An open lane's racing line is its centreline (the
+acceleration lane is straight), timed from rest. The centreline's figure is
+kept beside the limit. Both are computed once per track and car.
 """
 
 from __future__ import annotations
 
+import logging
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import splev, splprep
+from scipy.ndimage import uniform_filter1d
 
 from conesim.core.polyline import Polyline
+from conesim.envs.racing_line import MARGIN_M, Corridor, racing_lines, spline_grid
+from conesim.envs.traction import AxleLimits
+from conesim.sim.progress import PolylineProgress
+from conesim.sim.race_control import line_crossings_along
 from conesim.sim.vehicle_params import VehicleParams
+from conesim.tracks import Layout, Track
 
 FloatArray = NDArray[np.float64]
 STEP_M = 0.25  # [m] resampling step of the centreline
+CURVATURE_WINDOW_M = 2.0  # [m] the curvature is averaged over this much of the line
+BLENDS = (0.0, 0.25, 0.5, 0.75, 1.0)  # shares of the shortest path in the lines timed,
+BLEND_REFINE = 0.125  # then these either side of the fastest
+
+_LOG = logging.getLogger(__name__)
 
 
 def centreline_grid(points: FloatArray, closed: bool) -> tuple[FloatArray, FloatArray]:
@@ -49,77 +77,64 @@ def centreline_grid(points: FloatArray, closed: bool) -> tuple[FloatArray, Float
     loop) goes through the given points, which lie on the curve; it is
     sampled every ``STEP_M`` of its arc length, and the curvature at each
     sample is the polyline's through the samples (``Polyline.curvature``,
-    the circle through a sample and its neighbours).
+    the circle through a sample and its neighbours), averaged over
+    ``CURVATURE_WINDOW_M`` (a car a wheelbase long does not feel a ripple
+    shorter than itself; TUM's lap-time tools, too, take the curvature over a
+    preview and a review of the path). The average keeps a circle's 1/R.
 
     Returns:
         (s (k,) [m], kappa (k,) [1/m]).
     """
-    pts = np.asarray(points, dtype=float)
-    if closed:
-        pts = np.vstack([pts, pts[:1]])
-    seg = np.hypot(*np.diff(pts, axis=0).T)
-    pts = pts[np.concatenate([[True], seg > 1e-9])]
-    tck, _ = splprep(pts.T, s=0.0, per=1 if closed else 0, k=3)
-    dense = np.linspace(0.0, 1.0, 20 * len(pts))
-    x, y = splev(dense, tck)
-    s_dense = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
-    length = float(s_dense[-1])
-    n = max(8, round(length / STEP_M))
-    s = np.linspace(0.0, length, n, endpoint=not closed)
-    samples = np.column_stack(splev(np.interp(s, s_dense, dense), tck))
-    return s, Polyline(samples, closed).curvature()
+    s, samples = spline_grid(points, closed, STEP_M)
+    kappa = Polyline(samples, closed).curvature()
+    window = max(1, round(CURVATURE_WINDOW_M / STEP_M))
+    return s, uniform_filter1d(kappa, window, mode="wrap" if closed else "nearest")
 
 
 def qss_speed_profile(
     s: FloatArray, kappa: FloatArray, closed: bool, p: VehicleParams, v_start: float = 0.0
 ) -> FloatArray:
     """Quasi-steady-state speed at each station [m/s] (see the module docstring)."""
-    mu_peak = p.mu * p.tyre_front.D
-    k_aero = 0.5 * p.air_density * p.lift_area / p.mass
-    k_drag = 0.5 * p.air_density * p.drag_area / p.mass
-    v_top = _top_speed(p)
-    denom = np.abs(kappa) - mu_peak * k_aero
-    with np.errstate(divide="ignore"):
-        v_corner = np.where(
-            denom > 0, np.sqrt(mu_peak * p.gravity / np.maximum(denom, 1e-12)), v_top
-        )
-    v_lim = np.minimum(v_corner, v_top)
+    axles = AxleLimits(p)
+    v_lim = axles.corner_speed(kappa, _top_speed(p))
     n = len(s)
-    ds = np.diff(s) if not closed else np.full(n, s[1] - s[0])
+    ds = (np.diff(s) if not closed else np.full(n, s[1] - s[0])).tolist()
+    k_abs = np.abs(kappa).tolist()
+    drive, brake, sqrt = axles.drive, axles.brake, math.sqrt
 
-    def a_available(v: float, k: float) -> float:
-        a_max = mu_peak * (p.gravity + k_aero * v * v)
-        lat = min(1.0, v * v * abs(k) / a_max)
-        return a_max * math.sqrt(max(0.0, 1.0 - lat * lat))
-
-    def forward(v: FloatArray, laps: int, v0: float | None) -> FloatArray:
-        out = v.copy()
-        if v0 is not None:
-            out[0] = min(out[0], v0)
+    def forward(out: list[float], laps: int) -> None:
         for _ in range(laps):
             for i in range(n - 1 if not closed else n):
-                j = (i + 1) % n
+                j = i + 1 if i + 1 < n else 0
                 vi = out[i]
-                f_drive = min(p.max_drive_force, p.max_power / max(vi, 0.1)) / p.mass
-                resist = k_drag * vi * vi + p.rolling_resistance * p.gravity
-                a = min(p.max_accel, f_drive - resist, a_available(vi, kappa[i]))
-                out[j] = min(out[j], math.sqrt(vi * vi + 2.0 * max(a, 0.0) * ds[i]))
-        return out
+                a = drive(vi, k_abs[i])
+                out[j] = min(out[j], sqrt(vi * vi + 2.0 * max(a, 0.0) * ds[i]))
 
-    def backward(v: FloatArray, laps: int) -> FloatArray:
-        out = v.copy()
+    def backward(out: list[float], laps: int) -> None:
         for _ in range(laps):
             for i in range(n - 1 if not closed else n, 0, -1):
                 j = i % n
                 k = i - 1
                 vj = out[j]
-                a = min(p.max_decel, a_available(vj, kappa[k]))  # braking on segment k -> j
-                out[k] = min(out[k], math.sqrt(vj * vj + 2.0 * a * ds[k]))
-        return out
+                a = brake(vj, k_abs[k])  # braking on segment k -> j
+                out[k] = min(out[k], sqrt(vj * vj + 2.0 * a * ds[k]))
 
-    laps = 2 if closed else 1
-    v = forward(v_lim, laps, None if closed else v_start)
-    return backward(v, laps)
+    if not closed:
+        v = v_lim.tolist()
+        v[0] = min(v[0], v_start)
+        forward(v, 1)
+        backward(v, 1)
+        return np.array(v)
+    # A loop from its slowest corner: no pass lowers the smallest limit (both
+    # only take minima with speeds reached from a lower one), so the speed
+    # there is known and one pass round each way is periodic.
+    first = int(np.argmin(v_lim))
+    ds = ds[first:] + ds[:first]
+    k_abs = k_abs[first:] + k_abs[:first]
+    v = np.roll(v_lim, -first).tolist()
+    forward(v, 1)
+    backward(v, 1)
+    return np.roll(np.array(v), first)
 
 
 def _top_speed(p: VehicleParams) -> float:
@@ -127,8 +142,9 @@ def _top_speed(p: VehicleParams) -> float:
     v = 10.0
     for _ in range(100):  # fixed point of P / v = drag(v) + roll
         drive = min(p.max_drive_force, p.max_power / v)
-        resist = (
-            0.5 * p.air_density * p.drag_area * v * v + p.rolling_resistance * p.mass * p.gravity
+        down = 0.5 * p.air_density * p.lift_area * v * v
+        resist = 0.5 * p.air_density * p.drag_area * v * v + p.rolling_resistance * (
+            p.mass * p.gravity + down
         )
         v = v * (drive / resist) ** (1.0 / 3.0)
     return v
@@ -165,3 +181,113 @@ def limit_lap_time(
     t0 = float(np.interp(start_s if timed_from_s is None else timed_from_s, s, t))
     t1 = float(np.interp(s[-1] if timed_to_s is None else timed_to_s, s, t))
     return t1 - t0
+
+
+@dataclass(frozen=True)
+class LapLimit:
+    """The limit of a track's timed lap for one car.
+
+    Attributes:
+        limit_s: the fastest QSS lap found on a line inside the track [s].
+        centreline_s: the QSS lap along the centreline [s].
+        racing_line: (k, 2) the line of ``limit_s`` [m], a loop: the spline
+            the QSS times, sampled every ``STEP_M``; None where it is the
+            centreline (an open lane, or no line could be found).
+        blend: the shortest path's share in that line [-]; None with the
+            centreline.
+    """
+
+    limit_s: float
+    centreline_s: float
+    racing_line: FloatArray | None = None
+    blend: float | None = None
+
+
+def track_lap_limit(track: Track, params: VehicleParams | None = None) -> LapLimit:
+    """The limit of ``track``'s timed lap for the car ``params`` (module docstring).
+
+    Cached per track and car: a sweep's runs on one track compute it once.
+    """
+    p = params or VehicleParams()
+    key = (track.name, track.layout, track.cones.tobytes(), track.kinds, track.start_pose, p)
+    if key not in _LIMITS:
+        if len(_LIMITS) >= _CACHE_SIZE:
+            del _LIMITS[next(iter(_LIMITS))]  # the oldest
+        _LIMITS[key] = _compute_limit(track, p)
+    return _LIMITS[key]
+
+
+_CACHE_SIZE = 16  # tracks x cars whose limits are kept
+_LIMITS: dict[tuple[object, ...], LapLimit] = {}
+
+
+def _compute_limit(track: Track, p: VehicleParams) -> LapLimit:
+    centre = np.asarray(track.centreline)
+    clearance = 0.5 * p.width + MARGIN_M
+    if track.layout == Layout.CLOSED:
+        corridor = Corridor(
+            centre,
+            Polyline(track.left_boundary, True),
+            Polyline(track.right_boundary, True),
+            clearance,
+        )
+    else:
+        mask = _skidpad_circle(track) if track.layout == Layout.SKIDPAD else None
+        if mask is None:  # an open lane, or a skidpad whose circle cannot be found
+            lane = _open_lane_time(track, p)
+            return LapLimit(limit_s=lane, centreline_s=lane)
+        corridor = Corridor(
+            centre[mask],
+            Polyline(np.asarray(track.left_boundary)[mask], True),
+            Polyline(np.asarray(track.right_boundary)[mask], True),
+            clearance,
+        )
+    centreline_s = limit_lap_time(corridor.centre, True, p)
+    try:
+        lines = racing_lines(corridor)
+        times = {blend: limit_lap_time(lines.line(blend), True, p) for blend in BLENDS}
+        coarse = min(times, key=times.__getitem__)
+        for blend in (coarse - BLEND_REFINE, coarse + BLEND_REFINE):
+            if 0.0 < blend < 1.0:
+                times[blend] = limit_lap_time(lines.line(blend), True, p)
+    except (ValueError, ArithmeticError) as exc:  # RacingLineError, or a line too odd
+        _LOG.warning("%s: no racing line (%s); the limit is the centreline's", track.name, exc)
+        return LapLimit(limit_s=centreline_s, centreline_s=centreline_s)
+    best = min(times, key=times.__getitem__)
+    if times[best] > centreline_s:  # no line inside the margins beats the centreline
+        return LapLimit(limit_s=centreline_s, centreline_s=centreline_s)
+    return LapLimit(
+        limit_s=times[best],
+        centreline_s=centreline_s,
+        racing_line=spline_grid(lines.line(best), True, STEP_M)[1],
+        blend=best,
+    )
+
+
+def _skidpad_circle(track: Track) -> NDArray[np.bool_] | None:
+    """The centreline points of the skidpad's timed circle: between the first two
+    crossings of the timing line (None if it crosses it less often)."""
+    centre = np.asarray(track.centreline)
+    s = Polyline(centre).stations
+    finishes = line_crossings_along(centre, False, np.asarray(track.finish_line))
+    if len(finishes) < 2:
+        return None
+    return (s >= finishes[0]) & (s < finishes[1])
+
+
+def _open_lane_time(track: Track, p: VehicleParams) -> float:
+    """From rest at the car's start, timed from the start line to the finish line,
+    as race control times the simulated run [s]."""
+    centre = np.asarray(track.centreline)
+    line = Polyline(centre)
+    starts = line_crossings_along(centre, False, np.asarray(track.start_finish))
+    finishes = line_crossings_along(centre, False, np.asarray(track.finish_line))
+    start_s = float(PolylineProgress(line).project(track.start_pose.xy).station[0])
+    return limit_lap_time(
+        centre,
+        False,
+        p,
+        start_s=start_s,
+        timed_from_s=starts[0] if starts else start_s,
+        timed_to_s=finishes[0] if finishes else None,
+    )

@@ -3,6 +3,7 @@
 Three panels:
 
 - the map: the cones by kind, the global path by covariance status, the
+  racing line of the lap-time limit (a loop's; ``envs.racing_line``), the
   car's trajectory (its CG, the truth) drawn over them, and the run's events:
   cones hit (rings) and knocked down or out (crosses), the stretches driven
   off the track (red), where each lap ended (numbered) and where the run
@@ -36,6 +37,7 @@ if TYPE_CHECKING:  # the closed loop (and its compiled kernels) loads only for a
 
 TRAJECTORY = "#9400d3"
 EVENT = "#d62728"
+RACING_LINE = "#ff8c00"
 
 
 def save_run_picture(result: RunResult, track: Track, path: GlobalPath, out: Path) -> Path:
@@ -55,6 +57,12 @@ def _map(ax: Axes, result: RunResult, track: Track, path: GlobalPath) -> None:
     tr = result.trace
     ev = result.events
     draw_track(ax, track, path)
+    if result.racing_line is not None:
+        line = np.vstack([result.racing_line, result.racing_line[:1]])  # a loop, closed
+        ax.plot(
+            line[:, 0], line[:, 1], color=RACING_LINE, lw=0.9, ls="--",
+            label=f"racing line (limit {result.limit_lap_time_s:.2f} s)", zorder=4,
+        )  # fmt: skip
     x, y, t = np.asarray(tr.x), np.asarray(tr.y), np.asarray(tr.t)
     ax.plot(x, y, color=TRAJECTORY, lw=1.4, label="car (CG, truth)", zorder=5)
     for k, excursion in enumerate(ev.off_track):

@@ -23,11 +23,11 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from conesim.core.geodesy import GeodesyError
-from conesim.core.polyline import Polyline
 from conesim.envs.bag import BagRecorder
-from conesim.envs.limit_lap import limit_lap_time
+from conesim.envs.limit_lap import track_lap_limit
 from conesim.envs.loop import ClosedLoop, StepRecord, world_seed
 from conesim.envs.metrics import RunEvents, RunMetrics, RunTrace
 from conesim.envs.render import Renderer, SceneKeeper
@@ -35,19 +35,18 @@ from conesim.envs.scenario import Scenario
 from conesim.envs.scenario_file import scenario_to_mapping
 from conesim.localization.ekf import EkfConfig
 from conesim.planner import Autopilot, AutopilotConfig
-from conesim.sim.progress import PolylineProgress
-from conesim.sim.race_control import line_crossings_along
 from conesim.sim.sensors import Faults, SensorProfile, get_profile
 from conesim.sim.vehicle_params import VehicleParams
 from conesim.tracks import (
     DEFAULT_TRACK,
     GeneratedTrack,
-    Track,
     TrackFormatError,
     TrackSource,
     load_track,
     track_label,
 )
+
+FloatArray = NDArray[np.float64]
 
 TIMING_FIELDS = ("wall_time_s", "real_time_factor", "setup_time_s")
 """The fields of ``result.json`` that depend on the machine, not on the run:
@@ -57,7 +56,9 @@ the same seed gives the same result apart from them."""
 @dataclass
 class RunResult:
     """What a run reports (``result.json``); ``scenario`` is the resolved scenario
-    (``envs.scenario_file.scenario_to_mapping``), from which the run can be made again."""
+    (``envs.scenario_file.scenario_to_mapping``), from which the run can be made again.
+    ``trace`` and ``racing_line`` ((k, 2) [m], the line of ``limit_lap_time_s``, None on
+    an open lane; ``envs.limit_lap.LapLimit``) are for ``run.png``, not in the JSON."""
 
     track: str
     seed: int
@@ -81,10 +82,12 @@ class RunResult:
     midline_rmse_m: float | None
     planner_fallbacks: int
     limit_lap_time_s: float
+    centreline_lap_time_s: float
     lap_time_ratio: float | None
     events: RunEvents = field(default_factory=RunEvents)
     trace: RunTrace = field(repr=False, default_factory=RunTrace)
     scenario: dict[str, Any] = field(repr=False, default_factory=dict)
+    racing_line: FloatArray | None = field(repr=False, default=None)
 
     @property
     def clean(self) -> bool:
@@ -92,39 +95,12 @@ class RunResult:
         return self.finished and self.cones_down_or_out == 0 and self.off_track_events == 0
 
     def to_json(self) -> dict[str, Any]:
-        """The JSON-able result (the trace left out; ``clean`` added)."""
+        """The JSON-able result (the trace and the racing line left out; ``clean`` added)."""
         out = asdict(self)
         out.pop("trace")
+        out.pop("racing_line")
         out["clean"] = self.clean
         return out
-
-
-def timed_limit_lap(track: Track) -> float:
-    """The friction-limited lap time for the track's timed lap [s].
-
-    A loop: a flying lap of the centreline. The skidpad: one flying circle
-    (the centreline between its first two crossings of the timing line). An
-    open lane: from rest at the car's start, timed from the start line to the
-    finish line, as race control times the simulated run.
-    """
-    centre = np.asarray(track.centreline)
-    if track.layout == "closed":
-        return limit_lap_time(centre, True)
-    line = Polyline(centre)
-    s = line.stations
-    finishes = line_crossings_along(centre, False, np.asarray(track.finish_line))
-    if track.layout == "skidpad" and len(finishes) >= 2:
-        mask = (s >= finishes[0]) & (s < finishes[1])
-        return limit_lap_time(centre[mask], True)
-    starts = line_crossings_along(centre, False, np.asarray(track.start_finish))
-    start_s = float(PolylineProgress(line).project(track.start_pose.xy).station[0])
-    return limit_lap_time(
-        centre,
-        False,
-        start_s=start_s,
-        timed_from_s=starts[0] if starts else start_s,
-        timed_to_s=finishes[0] if finishes else None,
-    )
 
 
 def run_scenario(
@@ -293,7 +269,7 @@ def _result(
 ) -> RunResult:
     race = last.truth.race
     lap_times = [float(v) for v in race.lap_times]
-    limit = timed_limit_lap(loop.track)
+    limit = track_lap_limit(loop.track, loop.world_config.vehicle)
     best = min(lap_times) if lap_times else None
     return RunResult(
         track=loop.track.name,
@@ -317,8 +293,10 @@ def _result(
         localization_yaw_rmse_deg=metrics.localization_yaw_rmse_deg,
         midline_rmse_m=metrics.midline_rmse_m,
         planner_fallbacks=metrics.fallbacks,
-        limit_lap_time_s=limit,
-        lap_time_ratio=None if best is None else best / limit,
+        limit_lap_time_s=limit.limit_s,
+        centreline_lap_time_s=limit.centreline_s,
+        lap_time_ratio=None if best is None else best / limit.limit_s,
         events=metrics.events,
         trace=metrics.trace,
+        racing_line=limit.racing_line,
     )

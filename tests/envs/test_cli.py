@@ -157,7 +157,7 @@ def test_run_json_on_acceleration(tmp_path: Path, capsys: pytest.CaptureFixture[
         "laps_completed", "lap_times_s", "cones_hit", "cones_down_or_out",
         "off_track_events", "sim_time_s", "wall_time_s", "real_time_factor",
         "setup_time_s", "localization_pos_rmse_m", "localization_yaw_rmse_deg", "midline_rmse_m",
-        "planner_fallbacks", "limit_lap_time_s",
+        "planner_fallbacks", "limit_lap_time_s", "centreline_lap_time_s",
     }  # fmt: skip
     assert required <= set(result)
     assert result["laps_completed"] == 1 and result["cones_down_or_out"] == 0
@@ -464,7 +464,7 @@ def test_empty_names_are_refused(
     assert_bad_input(code, out, err, message)
 
 
-def make_result(lap_times: list[float], limit: float = 14.94) -> RunResult:
+def make_result(lap_times: list[float], limit: float = 14.94, centre: float = 16.5) -> RunResult:
     """A RunResult with the given laps of a 1-lap run and neutral other fields."""
     best = min(lap_times) if lap_times else None
     return RunResult(
@@ -474,7 +474,8 @@ def make_result(lap_times: list[float], limit: float = 14.94) -> RunResult:
         cones_hit=0, cones_down_or_out=0, off_track_events=0, sim_time_s=1.0,
         wall_time_s=1.0, real_time_factor=1.0, setup_time_s=0.5, localization_pos_rmse_m=None,
         localization_yaw_rmse_deg=None, midline_rmse_m=None, planner_fallbacks=0,
-        limit_lap_time_s=limit, lap_time_ratio=None if best is None else best / limit,
+        limit_lap_time_s=limit, centreline_lap_time_s=centre,
+        lap_time_ratio=None if best is None else best / limit,
     )  # fmt: skip
 
 
@@ -482,7 +483,7 @@ def test_results_table_text() -> None:
     """No lap: 'none' without a unit and 'n/a'; a lap: seconds and the ratio as '1.14x'."""
     table = format_result(make_result([]), Path("out"))
     assert "laps               0/1: none\n" in table
-    assert "limit lap          14.94 s (best lap n/a)\n" in table
+    assert "limit lap          14.94 s (best lap n/a); centreline 16.50 s\n" in table
     table = format_result(make_result([17.03]), Path("out"))
     assert "1/1: 17.03 s\n" in table
     assert "(best lap 1.14x)" in table

@@ -1,0 +1,95 @@
+"""Tests for envs.racing_line: the minimum-curvature QP against worked geometry."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from conesim.core.polyline import Polyline
+from conesim.envs.racing_line import (
+    Corridor,
+    offset_bounds,
+    racing_lines,
+    shortest_path_offsets,
+)
+from conesim.tracks import load_track
+
+CLEARANCE = 0.95  # [m] half the default car's 1.4 m and the 0.25 m margin
+
+
+def ring(radius: float, n: int = 720) -> np.ndarray:
+    """n points on a counter-clockwise circle of ``radius`` [m] at the origin."""
+    a = np.arange(n) * 2 * math.pi / n
+    return radius * np.column_stack([np.cos(a), np.sin(a)])
+
+
+def ring_corridor(radius: float, width: float) -> Corridor:
+    """A counter-clockwise ring lane: the left boundary inside, the right outside."""
+    return Corridor(
+        ring(radius, 400),
+        Polyline(ring(radius - width / 2), True),
+        Polyline(ring(radius + width / 2), True),
+        CLEARANCE,
+    )
+
+
+@pytest.mark.parametrize(("radius", "width"), [(9.0, 3.0), (20.0, 4.0), (45.0, 3.5)])
+def test_min_curvature_line_of_a_ring_is_its_outermost_circle(radius: float, width: float) -> None:
+    """On a ring of constant width the least curvature is the widest circle the car
+    may drive, R + (w/2 - d) with d = half width + margin; the shortest is R - (w/2 - d)."""
+    lines = racing_lines(ring_corridor(radius, width))
+    slack = width / 2 - CLEARANCE
+    assert_allclose(np.hypot(*lines.line(0.0).T), radius + slack, atol=5e-3)
+    assert_allclose(np.hypot(*lines.line(1.0).T), radius - slack, atol=5e-3)
+
+
+def test_lines_stay_inside_their_bounds_on_the_shipped_loops() -> None:
+    """Both QPs' offsets lie within the box (to OSQP's tolerance), and the box keeps the
+    clearance from both cone polylines: every point of every blend is >= d from them."""
+    for name in ("trackdrive", "autocross"):
+        track = load_track(name)
+        left = Polyline(track.left_boundary, True)
+        right = Polyline(track.right_boundary, True)
+        lines = racing_lines(Corridor(np.asarray(track.centreline), left, right, CLEARANCE))
+        for alpha in (lines.min_curvature, lines.shortest):
+            assert np.all(alpha >= lines.lower - 1e-6) and np.all(alpha <= lines.upper + 1e-6)
+        for blend in (0.0, 0.5, 1.0):
+            pts = lines.line(blend)
+            assert -left.project(pts).lateral.min() >= CLEARANCE - 1e-5, name
+            assert right.project(pts).lateral.min() >= CLEARANCE - 1e-5, name
+
+
+def test_min_curvature_line_has_less_curvature_than_the_centreline() -> None:
+    """On trackdrive the line's sum of squared curvatures is well below the centreline's."""
+    track = load_track("trackdrive")
+    corridor = Corridor(
+        np.asarray(track.centreline),
+        Polyline(track.left_boundary, True),
+        Polyline(track.right_boundary, True),
+        CLEARANCE,
+    )
+    centre = Polyline(corridor.centre, True).resample(1.0)
+    line = Polyline(racing_lines(corridor).line(0.0), True).resample(1.0)
+    assert np.sum(line.curvature() ** 2) < 0.7 * np.sum(centre.curvature() ** 2)
+
+
+def test_a_lane_narrower_than_the_car_holds_the_line_in_its_middle() -> None:
+    """Where 2 d exceeds the width, both bounds are the middle: the line is the centre."""
+    corridor = ring_corridor(20.0, 1.5)
+    normals, lower, upper = offset_bounds(Polyline(corridor.centre, True).points, corridor)
+    assert_allclose(lower, upper)
+    assert_allclose(lower, 0.0, atol=1e-3)
+    assert_allclose(np.hypot(*racing_lines(corridor).line(0.3).T), 20.0, atol=1e-3)
+    assert_allclose(np.hypot(*normals.T), 1.0)
+
+
+def test_shortest_path_of_a_straight_lane_is_its_centre() -> None:
+    """Offsets bounded by +-1 m on a straight reference: moving sideways only lengthens."""
+    x = np.arange(0.0, 50.0, 1.0)
+    ref = np.column_stack([x, np.zeros_like(x)])
+    normals = np.tile([0.0, 1.0], (len(x), 1))
+    alpha = shortest_path_offsets(ref, normals, np.full(len(x), -1.0), np.full(len(x), 1.0))
+    assert_allclose(alpha, 0.0, atol=1e-6)
