@@ -49,6 +49,7 @@ from conesim.sim.vehicle import VehicleState
 from conesim.sim.world import World, WorldConfig
 from conesim.tracks import Track
 from conesim.tracks.global_path import GlobalPath, global_path_for_track
+from conesim.tracks.survey import PathSurvey, surveyed
 
 FloatArray = NDArray[np.float64]
 _TIME_EPS = 1e-9  # [s] tolerance of the time limit
@@ -258,10 +259,13 @@ class ClosedLoop:
         ekf: the filter's settings; default the ones matched to the world's
             sensor profile (``envs.ekf_tuning.matched_ekf``: its shipped
             tuning, else rtk's, with its receiver's error model).
+        survey: how far the global path the driver gets is off the track's
+            (``tracks.survey``); default exact.
 
     Attributes:
         track, world_config, rules, control_rate, substeps: as given or derived.
-        global_path: the track's global path (a track asset) in ``reference``.
+        global_path: the track's global path (a track asset) in ``reference``,
+            as surveyed.
         world: the simulated world of the current episode.
         localizer: localization of the current episode; its ``frames`` is the frame tree.
         driver: the current episode's driver, or None.
@@ -278,6 +282,7 @@ class ClosedLoop:
         rules: EpisodeRules | None = None,
         driver: DriverFactory | None = None,
         ekf: EkfConfig | None = None,
+        survey: PathSurvey | None = None,
     ) -> None:
         self.track = track
         self.rules = rules or EpisodeRules()
@@ -296,7 +301,9 @@ class ClosedLoop:
         self.control_rate = float(control_rate)
         self.substeps = round(ratio)
         self.ekf_config = ekf or matched_ekf(self.world_config.sensor_profile)
-        self.global_path = global_path_for_track(track, self.world_config.origin)
+        self.global_path = surveyed(
+            global_path_for_track(track, self.world_config.origin), survey or PathSurvey()
+        )
         self._driver_factory = driver
         self.driver: Driver | None = None
         self.record: StepRecord | None = None

@@ -45,6 +45,7 @@ from conesim.sim.sensors import DEFAULT_PROFILE, Faults, SensorProfile, apply_fa
 from conesim.sim.vehicle_params import VehicleParams
 from conesim.sim.world import WorldConfig
 from conesim.tracks import DEFAULT_TRACK, GeneratedTrack, Track, track_label
+from conesim.tracks.survey import PathSurvey
 
 Localization = Literal["fused", "raw", "truth"]
 """The localization modes (``localization.modes``)."""
@@ -78,6 +79,8 @@ class Scenario:
             given: the tuning its fields started from, for reports).
         autopilot: the autopilot's settings; None: the localization's default.
         vehicle: the car.
+        global_path: how far the global path given to the car is off the
+            track's (``tracks.survey.PathSurvey``: per-point noise, a bias).
     """
 
     track: str | GeneratedTrack = DEFAULT_TRACK
@@ -95,6 +98,7 @@ class Scenario:
     ekf_tuning: EkfTuning = "auto"
     autopilot: AutopilotConfig | None = None
     vehicle: VehicleParams = field(default_factory=VehicleParams)
+    global_path: PathSurvey = field(default_factory=PathSurvey)
 
     def __post_init__(self) -> None:
         track = self.track
@@ -148,6 +152,7 @@ class Scenario:
             ("ekf", (EkfConfig, type(None))),
             ("autopilot", (AutopilotConfig, type(None))),
             ("vehicle", VehicleParams),
+            ("global_path", PathSurvey),
         )
         for name, kind in parts:
             value = getattr(self, name)
@@ -227,4 +232,5 @@ class Scenario:
             rules=rules or self.rules,
             driver=driver,
             ekf=self.ekf_config(),
+            survey=self.global_path,
         )

@@ -26,6 +26,7 @@ The format (version 1; every key optional, the defaults are ``conesim run``'s)::
       preset: auto             # auto (cautious with raw) | default | cautious
       classifier: {mode: colour}
     vehicle: {mass: 200.0}     # any VehicleParams field
+    global_path: {noise: 0.2, bias: 0.3, seed: 1}   # the surveyed path's error [m]
 
 Overrides (``--set sensors.cones.max_range=20``, or ``load_scenario(path,
 {"laps": 3})``) change the file's mapping before it is checked, so an
@@ -61,6 +62,7 @@ from conesim.planner.autopilot import default_config
 from conesim.sim.sensors import DEFAULT_PROFILE, PROFILES, Faults, SensorProfile, get_profile
 from conesim.sim.vehicle_params import VehicleParams
 from conesim.tracks import GeneratedTrack, TrackSpec, shipped_tracks
+from conesim.tracks.survey import PathSurvey
 
 FORMAT_KEY = "conesim_scenario"
 FORMAT_VERSION = 1
@@ -69,7 +71,7 @@ SCALARS = (
     "control_rate", "physics_rate", "localization",
 )  # fmt: skip
 """The top-level keys that are plain values, in the order ``show`` writes them."""
-GROUPS = ("sensors", "faults", "ekf", "autopilot", "vehicle")
+GROUPS = ("sensors", "faults", "ekf", "autopilot", "vehicle", "global_path")
 TOP_KEYS = (FORMAT_KEY, *SCALARS, *GROUPS)
 SHORTHAND = {"sensors": "profile", "ekf": "tuning", "autopilot": "preset"}
 """A group given as a plain name means this key of it (``sensors: consumer``)."""
@@ -210,6 +212,8 @@ def _scenario(data: dict[str, Any]) -> Scenario:
     values["autopilot"] = _autopilot(data.get("autopilot"), localization)
     if data.get("vehicle") is not None:
         values["vehicle"] = build(VehicleParams, data["vehicle"], path=("vehicle",))
+    if data.get("global_path") is not None:
+        values["global_path"] = build(PathSurvey, data["global_path"], path=("global_path",))
     try:
         return Scenario(**values)
     except ValueError as exc:
@@ -398,6 +402,7 @@ def scenario_to_mapping(scenario: Scenario) -> dict[str, Any]:
     preset = "cautious" if full.autopilot == AutopilotConfig.cautious() else "default"
     out["autopilot"] = {"preset": preset, **plain(full.autopilot, HIDDEN)}
     out["vehicle"] = plain(full.vehicle)
+    out["global_path"] = plain(full.global_path)
     return out
 
 

@@ -20,8 +20,9 @@ localization), the global path, and the messages it receives.
   ``reference`` into the current ``os_sensor`` frame, pure pursuit steers
   toward its lookahead point, and the PI controller tracks the waypoint
   speeds, within the friction ellipse left by the lateral acceleration the
-  steering asks for (v^2 tan(delta) / L). Without a path the car brakes to
-  a stop with the wheels straight.
+  steering asks for (v^2 tan(delta) / L), and not accelerating while the
+  steering is at full lock (``full_lock_share``). Without a path the car
+  brakes to a stop with the wheels straight.
 
 Building an autopilot runs one planning step on a made-up track
 (``warm_up_planner``), once per process: the planner's compiled kernels load
@@ -69,6 +70,7 @@ from conesim.localization.frames import (
 from conesim.planner.classify import ClassifiedCones, classify_cones_by_side
 from conesim.planner.config import AutopilotConfig
 from conesim.planner.geometry import FloatArray, PathProjector, arc_length
+from conesim.planner.global_fit import smoothed_global_path
 from conesim.planner.global_speed import GlobalSpeedPlan
 from conesim.planner.messages import ControlCommand
 from conesim.planner.midline import LocalPlan, PlanStatus, reference_path_planning
@@ -182,6 +184,8 @@ class Autopilot:
         self.buffer = buffer
         self.config = config or AutopilotConfig()
         self.control_rate = float(control_rate)
+        global_path = smoothed_global_path(global_path, self.config.global_path_min_scatter)
+        self.global_path = global_path
         self.projector = PathProjector(global_path.polyline)
         self.global_speed = (
             GlobalSpeedPlan(global_path, self.config.speed_profile)
@@ -296,18 +300,44 @@ class Autopilot:
     ) -> FloatArray:
         """The waypoints' speeds from the global path's plan (``speed_source``
         ``"global"``) or the local profile ending at its speed where the path
-        ends (``"local"``); a path of one point or none gets the local profile."""
+        ends (``"local"``); a path of one point or none gets the local profile.
+
+        With ``horizon_stop`` the global plan's speeds are held to what
+        brakes at ``a_brake`` to v_end at the end of the path in view,
+        v_i^2 <= v_end^2 + 2 a_brake (s_end - s_i): v_end is the global
+        plan's speed there where the path's end lies on the map (within
+        ``pursue_global_max_gap`` of the global path), and 0 where it does
+        not: where the map and the cones disagree the car can always stop
+        within what it has seen.
+        """
         assert self.global_speed is not None
         profile = self.config.speed_profile
         if len(path) <= 1:
             return speed_profile(path, profile, self.speed(), s=s)
         s = arc_length(path) if s is None else s
+        v_end = self.global_speed.speed_at(sensor_station + float(path[0, 0]) + float(s[-1]))
+        if not self._end_on_map(path, sensor_station):
+            v_end = 0.0  # the map and the cones disagree there: stop within what is seen
         if self.config.speed_source == "global":
             v = self.global_speed.speeds_at(self._stations(path, s, sensor_station))
+            if profile.horizon_stop:  # brake to v_end at the end of the path in view
+                v = np.minimum(v, np.sqrt(v_end * v_end + 2.0 * profile.a_brake * (s[-1] - s)))
             v[0] = min(v[0], max(self.speed(), 0.0))
             return forward_pass(s, v, profile.a_drive)
-        v_end = self.global_speed.speed_at(sensor_station + float(s[-1]))
         return speed_profile(path, profile, self.speed(), s=s, v_end=v_end)
+
+    def _end_on_map(self, path: FloatArray, sensor_station: float) -> bool:
+        """Whether the path's end, placed in ``reference`` by the latest pose, lies
+        within ``pursue_global_max_gap`` of the global path (searched from 5 m
+        behind the sensor's station to the planner's range ahead)."""
+        c = self.config
+        try:
+            end = self.buffer.transform_points(c.reference_frame, c.sensor_frame, path[-1:], LATEST)
+        except TransformError:
+            return False
+        window = (sensor_station - 5.0, sensor_station + c.midline.max_range)
+        gap = float(self.projector.project(end, window=window).distance[0])
+        return gap <= c.pursue_global_max_gap
 
     def _global_curvature(self, path: FloatArray, sensor_station: float) -> FloatArray:
         """The global path's curvature at the waypoints (``speed_source`` ``"global"``;
@@ -363,6 +393,10 @@ class Autopilot:
         self.target_speed = v_ref
         a_lat = speed * speed * math.tan(self.steering.steering) / c.pure_pursuit.wheelbase
         acceleration = self.speed_controller.step(v_ref, speed, dt, a_ff, a_lat)
+        lock = c.speed_control.full_lock_share * c.pure_pursuit.max_steer
+        if abs(self.steering.steering) >= lock:
+            # At full lock the car turns no tighter; faster, it only runs wider.
+            acceleration = min(acceleration, 0.0)
         self.command = ControlCommand(t, self.steering.steering, acceleration)
         return self.command
 

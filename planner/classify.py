@@ -20,14 +20,17 @@ The ROS pipeline's node, step by step:
    direction with the vector from the segment to the cone: > 0 left, else
    right (the ROS pipeline's ``else`` branch takes a cone exactly on the path as right).
 
-Colour mode (``ClassifierConfig.mode == "colour"``) trusts the detector's colour
-where it names a side: ``left_colours`` (default blue) are left,
-``right_colours`` (default yellow) are right, following the FS rule "blue on
-the left, yellow on the right" in the driving direction. Orange, big orange,
-``unknown`` and colour-blind detections fall back to the geometric rule. A
-colour that contradicts the geometry is kept (and counted in
-``ClassifiedCones.colour_disagreements``); the planner's bridge checks reject
-the bridges such a cone would make.
+Colour mode (``ClassifierConfig.mode == "colour"``, the default) takes the
+detector's colour where it names a side: ``left_colours`` (default blue) are
+left, ``right_colours`` (default yellow) are right, following the FS rule
+"blue on the left, yellow on the right" in the driving direction. Orange,
+big orange, ``unknown`` and colour-blind detections fall back to the
+geometric rule. A colour that contradicts the geometry (counted in
+``ClassifiedCones.colour_disagreements``) is kept only where the cone stands
+within ``geometry_overrules`` of the global path, where the geometry is
+unsure; farther out the geometry decides: a detector that swaps blue and
+yellow now and then (5 % of the cones) does not move a cone across the lane.
+``mode = "geometric"`` is the ROS pipeline's colour-blind rule.
 
 Cones with a non-finite coordinate are dropped and counted (messages do not
 validate their numbers; ``localization.messages``).
@@ -209,7 +212,7 @@ def classify_cones_by_side(
         detections: the cones (``/sorted_cones_time``), (n, 3) in ``os_sensor``.
         buffer: the frame tree.
         path: the global path, or a projector built on it once (faster).
-        config: mode and colour rule; defaults to the ROS pipeline's geometric mode.
+        config: mode and colour rule; defaults to colour mode (``ClassifierConfig()``).
         time: lookup time [s]; None uses the detection's stamp.
         station_hint: the sensor's last station [m], if known.
         reference_frame: the world frame.
@@ -236,8 +239,10 @@ def classify_cones_by_side(
     disagreements = 0
     if config.mode == "colour":
         named = side_from_colour(detections.colours, len(detections), config)[finite]
-        by_colour = named != 0
-        disagreements = int(np.count_nonzero(by_colour & (named != side)))
+        disagree = (named != 0) & (named != side)
+        disagreements = int(np.count_nonzero(disagree))
+        # Where the geometry is clear, a colour that disagrees is a swap.
+        by_colour = (named != 0) & ~(disagree & (np.abs(offset) > config.geometry_overrules))
         side = np.where(by_colour, named, side).astype(np.int8)
     rejected = len(finite) - n
     return ClassifiedCones(

@@ -27,6 +27,7 @@ from typing import Any, Self
 from conesim.core.messages import CONE_COLOURS, FRAME_OS_SENSOR, FRAME_REFERENCE
 from conesim.planner.settings import (
     BridgeSettings,
+    LaneSettings,
     LimitSettings,
     OrderingSettings,
     PartnerSettings,
@@ -76,10 +77,15 @@ class ClassifierConfig(Settings):
     """Settings of ``classify_cones_by_side``.
 
     Attributes:
-        mode: ``"geometric"`` (the ROS pipeline: side of the nearest global-path
-            segment, colour ignored) or ``"colour"`` (a colour listed below
-            decides; any other colour, and a colour-blind detection, falls back
-            to geometric).
+        mode: ``"colour"`` (a colour listed below decides, unless the
+            geometry clearly disagrees; any other colour, and a colour-blind
+            detection, falls back to geometric) or ``"geometric"`` (the ROS
+            pipeline: side of the nearest global-path segment, colour ignored).
+        geometry_overrules: in colour mode, a cone farther than this from the
+            global path on the other side than its colour says is taken by
+            its side, a colour swap [m] (a boundary cone stands half the
+            lane, >= 1.5 m, out; a survey's bias shifts that by 0.3 m); inf:
+            the colour always decides.
         left_colours: colours taken as left cones in colour mode (FS rules: blue).
         right_colours: colours taken as right cones in colour mode (FS: yellow).
         window_back: the stretch of global path preferred for projection
@@ -93,7 +99,8 @@ class ClassifierConfig(Settings):
             ``inf`` projects onto the stretch only.
     """
 
-    mode: str = "geometric"
+    mode: str = "colour"
+    geometry_overrules: float = 0.75  # [m]
     left_colours: tuple[str, ...] = ("blue",)
     right_colours: tuple[str, ...] = ("yellow",)
     window_back: float = 20.0  # [m] a 360 deg detector also sees 15-20 m behind
@@ -101,7 +108,7 @@ class ClassifierConfig(Settings):
     window_penalty: float = 2.0  # [m]
 
     def __post_init__(self) -> None:
-        for name in ("window_back", "window_ahead", "window_penalty"):
+        for name in ("window_back", "window_ahead", "window_penalty", "geometry_overrules"):
             _check("ClassifierConfig", name, getattr(self, name), 0.0)
         if self.mode not in ("geometric", "colour"):
             raise ValueError(
@@ -169,6 +176,21 @@ class MidlineConfig(Settings):
         spacing: arc-length step of the resampled path [m] (spec 000: 0.5 m).
         max_start_distance: the path must start this close to the sensor [m].
         min_path_length: a shorter path is not sound [m].
+        doubled_cone_distance: of two cones of one side closer than this,
+            the outer one is left out (``midline.merge_doubled``; a gate's
+            big orange cones stand 0.3 m from the line, beside the edge's
+            cone, FS cones at most 5 m and in corners 1.5 m apart) [m]; 0: none.
+        keep_in_lane: move the fitted path into the lane less the car's
+            body (``planner.lane``); False keeps the midline.
+        lane_iterations: sweeps of the elastic band that then moves it,
+            within that room, towards the least curvature
+            (``kernels.lane_path``).
+        body_half_width: half the car's width [m] (``VehicleParams.width`` 1.4 m).
+        body_front: the car's front end ahead of the rear axle [m]
+            (wheelbase 1.53 m plus the 0.75 m front overhang), which sweeps
+            outside a tight turn.
+        lane_clearance: what the body keeps from the line between two
+            boundary cones [m]: a cone's radius (0.11 m) and tracking error.
     """
 
     max_range: float = 30.0  # [m]
@@ -202,6 +224,12 @@ class MidlineConfig(Settings):
     # 4 m: a path shorter than pure pursuit's lookahead puts the target at its
     # end; at the skidpad's crossing a 2 m path steered the car to full lock.
     min_path_length: float = 4.0  # [m]
+    doubled_cone_distance: float = 1.0  # [m]
+    keep_in_lane: bool = True
+    lane_iterations: int = 20
+    body_half_width: float = 0.7  # [m]
+    body_front: float = 2.28  # [m]
+    lane_clearance: float = 0.25  # [m]
 
     def __post_init__(self) -> None:
         owner = "MidlineConfig"
@@ -230,6 +258,10 @@ class MidlineConfig(Settings):
             "start_station_ahead",
             "max_start_distance",
             "min_path_length",
+            "body_half_width",
+            "doubled_cone_distance",
+            "body_front",
+            "lane_clearance",
         ):
             _check(owner, name, getattr(self, name), 0.0)
         _check(owner, "max_track_width", self.max_track_width, self.min_track_width)
@@ -237,6 +269,7 @@ class MidlineConfig(Settings):
         _check(owner, "spline_degree", self.spline_degree, 1, 5)
         _check(owner, "min_spline_points", self.min_spline_points, self.spline_degree + 1)
         _check(owner, "min_width_samples", self.min_width_samples, 1)
+        _check(owner, "lane_iterations", self.lane_iterations, 0)
         if self.bridge_selection not in ("shortest", "all"):
             raise ValueError(
                 f"{owner}.bridge_selection = {self.bridge_selection!r}: allowed 'shortest', 'all'"
@@ -265,6 +298,14 @@ class MidlineConfig(Settings):
         """Step 4's settings: the start's, then the chain's."""
         return from_fields(OrderingSettings, self)
 
+    @cached_property
+    def lane_settings(self) -> LaneSettings:
+        """Step 5b's settings: the body, its clearance and the band's sweeps."""
+        return from_fields(
+            LaneSettings, self, clearance=float(self.lane_clearance),
+            iterations=int(self.lane_iterations),
+        )  # fmt: skip
+
 
 @dataclass(frozen=True)
 class SpeedProfileConfig(Settings):
@@ -291,6 +332,25 @@ class SpeedProfileConfig(Settings):
         friction_ellipse: the drive and brake passes use only the grip the
             corner leaves, ``a * sqrt(1 - (a_lat / a_lat(v))^2)``
             (``planner.speed_profile``).
+        lock_radius: the car's full-lock radius at the rear axle [m]
+            (L / tan(max_steer) = 1.53 / tan(0.47) = 3.0 m). Near it the car
+            has no steering left to correct with, and its front end sweeps
+            out: the lateral limit is taken times
+            ``max(1 - (|kappa| lock_radius)^4, lock_share_min)`` (R 6 m: 0.94,
+            R 4 m: 0.68, R 3.3 m: 0.32); 0: no such cut.
+        lock_share_min: the least share of the lateral limit left [-]
+            (0.15: 2.5 m/s in a 3 m hairpin).
+        steering_rate_max: the wheels turn at most this fast [rad/s]; the
+            steering a path needs, delta = atan(L kappa), changes at
+            v L |dkappa/ds| / (1 + (L kappa)^2) (the slope over
+            ``jerk_window``). Pure pursuit's lookahead spreads a change over
+            its distance, except near full lock, where the car has no
+            steering to spare: v is held to steering_rate_max
+            (1 + (L kappa)^2) / (L |dkappa/ds| |kappa| lock_radius). Out of
+            a right kink into a left hairpin of 3.3 m (kappa -0.1 to 0.3 1/m
+            in 3 m) that is 4.2 m/s; on the skidpad's crossing (R 9.1 m) it
+            does not bind. inf: no limit.
+        wheelbase: L [m] (fssim 1.53 m).
     """
 
     # The tyre (fssim D = 1.6, mu = 1) grips 1.6 g = 15.7 m/s^2 before downforce;
@@ -307,6 +367,10 @@ class SpeedProfileConfig(Settings):
     lateral_jerk_max: float = 60.0  # [m/s^3] skidpad crossing ~10 m/s, lap tests seeds 0-5
     jerk_window: float = 4.0  # [m]
     friction_ellipse: bool = True
+    lock_radius: float = 3.0  # [m]
+    lock_share_min: float = 0.15  # [-]
+    steering_rate_max: float = 0.63  # [rad/s] EUFS QEV3 (VehicleParams.max_steer_rate)
+    wheelbase: float = 1.53  # [m]
 
     def __post_init__(self) -> None:
         for name in ("a_lat_max", "a_drive", "a_brake", "v_max"):
@@ -315,6 +379,10 @@ class SpeedProfileConfig(Settings):
         _check("SpeedProfileConfig", "lateral_jerk_max", self.lateral_jerk_max, 1e-9)
         _check("SpeedProfileConfig", "jerk_window", self.jerk_window, 0.0)
         _check("SpeedProfileConfig", "curvature_window", self.curvature_window, 0.0)
+        _check("SpeedProfileConfig", "lock_radius", self.lock_radius, 0.0)
+        _check("SpeedProfileConfig", "steering_rate_max", self.steering_rate_max, 1e-9)
+        _check("SpeedProfileConfig", "wheelbase", self.wheelbase, 1e-9)
+        _check("SpeedProfileConfig", "lock_share_min", self.lock_share_min, 1e-9, 1.0)
 
     # The groups the compiled profile (``planner.kernels``) reads by name, built
     # once per settings object.
@@ -407,6 +475,9 @@ class SpeedControlConfig(Settings):
             leaves [-] (none of the drive's is left at the grip).
         preview_time: the target speed is read this far ahead along the path [s].
         preview_min: and at least this far [m].
+        full_lock_share: while pure pursuit steers at least this share of
+            ``max_steer``, the car does not accelerate [-]: at full lock it
+            turns no tighter, and faster it runs wide (out of a 3 m hairpin).
     """
 
     kp: float = 1.5  # [1/s]
@@ -424,6 +495,7 @@ class SpeedControlConfig(Settings):
     ellipse_floor: float = 0.3  # [-]
     preview_time: float = 0.3  # [s]
     preview_min: float = 1.0  # [m]
+    full_lock_share: float = 0.95  # [-]
 
     def __post_init__(self) -> None:
         for name in (
@@ -439,6 +511,7 @@ class SpeedControlConfig(Settings):
         for name in ("max_accel", "max_decel", "lateral_grip"):
             _check("SpeedControlConfig", name, getattr(self, name), 1e-9)
         _check("SpeedControlConfig", "ellipse_floor", self.ellipse_floor, 0.0, 1.0)
+        _check("SpeedControlConfig", "full_lock_share", self.full_lock_share, 0.0, 1.0)
         _check("SpeedControlConfig", "grip_aero", self.grip_aero, 0.0)
 
 
@@ -484,6 +557,10 @@ class AutopilotConfig(Settings):
             in ``reference`` by the pose, lies within this distance of the
             global path [m]: where the map and the cones disagree by more
             (a poor pose), the car keeps to the cones.
+        global_path_min_scatter: a global path whose points scatter more
+            than this about a smooth curve is smoothed before use
+            (``planner.global_fit``: a surveyed path's error would read as
+            curvature) [m].
         speed_window: span of the frame-tree speed estimate used when no wheel
             speed has arrived [s].
         reference_frame: the world frame (a vehicle prefix is allowed).
@@ -499,6 +576,7 @@ class AutopilotConfig(Settings):
     speed_source: str = "global"
     pursue_global_beyond_path: bool = True
     pursue_global_max_gap: float = 1.0  # [m] raw pose (150 ms late): gaps up to 0.7 m
+    global_path_min_scatter: float = 0.05  # [m] exact paths: 0.01-0.02 m
     speed_window: float = 0.1  # [s]
     reference_frame: str = FRAME_REFERENCE
     sensor_frame: str = FRAME_OS_SENSOR
@@ -527,6 +605,7 @@ class AutopilotConfig(Settings):
 
     def __post_init__(self) -> None:
         _check("AutopilotConfig", "speed_window", self.speed_window, 1e-9)
+        _check("AutopilotConfig", "global_path_min_scatter", self.global_path_min_scatter, 0.0)
         _check("AutopilotConfig", "pursue_global_max_gap", self.pursue_global_max_gap, 0.0)
         if self.speed_source not in ("local", "global"):
             raise ValueError(

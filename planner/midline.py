@@ -3,7 +3,9 @@
 The ROS pipeline's node, step by step (each step named as a function):
 
 1. ``cones_to_sensor``: left and right cones from ``reference`` into
-   ``os_sensor`` with the latest transform (spec 000: ``Time(0)``).
+   ``os_sensor`` with the latest transform (spec 000: ``Time(0)``);
+   ``merge_doubled``: of two cones of a side standing closer than a cone
+   spacing (a gate's big orange cones beside the edge's), the inner kept.
 2. ``in_view``: cones within ``max_range``, ahead of ``min_x``, and between
    ``min_boundary_offset`` and ``max_boundary_offset`` from the global path
    (others are false positives, not boundary cones); then, once the track's
@@ -13,7 +15,8 @@ The ROS pipeline's node, step by step (each step named as a function):
    Delaunay on all cones, the checked left-right bridges and their midpoints.
 4. ``ordered_midpoints`` (``kernels.ordering``): the used bridges' midpoints
    from the nearest one in front, chaining nearest neighbours.
-5. ``fit_path`` (``spline``): B-spline through them, resampled every 0.5 m.
+5. ``fit_path`` (``spline``): B-spline through them, resampled every 0.5 m;
+   ``keep_in_lane`` (``lane``): moved into the lane less the car's body.
 6. ``check_path``: at least two midpoints, at least ``min_path_length`` long,
    starting within ``max_start_distance``, and crossing no boundary edge.
 7. ``speed_profile``: the waypoint speeds.
@@ -57,6 +60,7 @@ from conesim.planner.bridges import (
 from conesim.planner.classify import LEFT, RIGHT, ClassifiedCones
 from conesim.planner.config import MidlineConfig, SpeedProfileConfig
 from conesim.planner.geometry import FloatArray, arc_length, crosses_boundary
+from conesim.planner.lane import keep_in_lane
 from conesim.planner.messages import BridgeLines, LocalPath, Midpoints, Waypoints
 from conesim.planner.speed_profile import profile_speeds, speed_profile
 from conesim.planner.spline import fit_path
@@ -171,6 +175,31 @@ def cones_to_sensor(
         axis=cones.axis,
     )
     return cone_set, transform.stamp
+
+
+def merge_doubled(cones: ConeSet, config: MidlineConfig) -> ConeSet:
+    """Step 1b: of two cones of one side closer than ``doubled_cone_distance``, the outer goes.
+
+    A start/finish gate's big orange cones stand 0.3 m before and after the
+    line and often outside the lane's edge, beside the edge's own cone: the
+    bridges to the three then zigzag, and the midline with them. The lane
+    is bounded by the inner one; "outer" is the larger offset from the
+    global path towards the cone's side (a shift of the whole path, a
+    survey's bias, leaves the order as it is).
+    """
+    d = config.doubled_cone_distance
+    n = len(cones.points)
+    if d <= 0.0 or n < 2:
+        return cones
+    pts = cones.points
+    gap = np.hypot(pts[:, None, 0] - pts[None, :, 0], pts[:, None, 1] - pts[None, :, 1])
+    outward = cones.side * cones.offset  # how far out towards its side
+    same = cones.side[:, None] == cones.side[None, :]
+    inner = (outward[None, :] < outward[:, None]) | (
+        (outward[None, :] == outward[:, None]) & (np.arange(n)[None, :] < np.arange(n)[:, None])
+    )  # j is inner to i (ties: the first kept)
+    drop = (same & inner & (gap < d)).any(axis=1)
+    return cones.select(~drop) if drop.any() else cones
 
 
 def in_view(cones: ConeSet, config: MidlineConfig) -> NDArray[np.bool_]:
@@ -385,11 +414,13 @@ def reference_path_planning(
     """
     config = config or _DEFAULT_CONFIG
     all_cones, stamp = cones_to_sensor(cones, buffer, time, sensor_frame)
+    all_cones = merge_doubled(all_cones, config)
     cone_set, track, dropped = cones_with_partners(all_cones, config)
     bridges, boundary, midpoints, midpoints_length = bridges_and_midpoints(
         cone_set, delaunay_simplices(cone_set.points), config, track, cones.sensor_station
     )
     path = np.ascontiguousarray(fit_path(midpoints, config, midpoints_length), dtype=float)
+    path = keep_in_lane(path, boundary, track, config)
     # The check's numbers, the arc length for the speed profile and the
     # profile's limits: one compiled call.
     s, length, start, crosses, limits = kernel_chains.check_and_limit(

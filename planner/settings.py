@@ -142,6 +142,11 @@ class LimitSettings(NamedTuple):
         v_max: speed cap [m/s].
         lateral_jerk_max: lateral jerk limit [m/s^3]; inf: none.
         jerk_window: the curvature's slope is taken over this arc length [m].
+        lock_radius: the car's full-lock turning radius [m]; the lateral
+            limit shrinks towards it (0: never).
+        lock_share_min: the least share of the lateral limit left there [-].
+        steering_rate_max: the steering-rate limit [rad/s]; inf: none.
+        wheelbase: the car's wheelbase L [m], for it.
     """
 
     curvature_window: float
@@ -151,6 +156,10 @@ class LimitSettings(NamedTuple):
     v_max: float
     lateral_jerk_max: float
     jerk_window: float
+    lock_radius: float
+    lock_share_min: float
+    steering_rate_max: float
+    wheelbase: float
 
 
 class PassSettings(NamedTuple):
@@ -174,3 +183,21 @@ class PassSettings(NamedTuple):
     a_lat_aero: float
     horizon_stop: bool
     brake: bool
+
+
+class LaneSettings(NamedTuple):
+    """Step 5b (``kernels.lane_room``, ``kernels.lane_path``): the body in the lane.
+
+    Attributes:
+        body_half_width: half the car's width [m].
+        body_front: the car's front end ahead of the rear axle [m] (its
+            sweep outside a turn).
+        clearance: what the body keeps from a boundary line [m] (cone radius
+            and tracking error).
+        iterations: the elastic band's sweeps (0: the path as fitted).
+    """
+
+    body_half_width: float
+    body_front: float
+    clearance: float
+    iterations: int

@@ -104,7 +104,8 @@ class SpeedController:
             v_ref: target speed [m/s].
             speed: measured speed [m/s].
             dt: time since the last step [s].
-            a_ff: planned acceleration to feed forward [m/s^2].
+            a_ff: planned acceleration to feed forward [m/s^2]; none of it
+                upwards while the car is faster than ``v_ref``.
             a_lat: lateral acceleration the steering asks for now [m/s^2]
                 (``ellipse_limits``).
 
@@ -121,6 +122,8 @@ class SpeedController:
         c = self.config
         max_accel, max_decel = ellipse_limits(a_lat, c, speed)
         error = v_ref - speed
+        if error < -1e-6:  # too fast (beyond rounding): no speeding up with the plan
+            a_ff = min(a_ff, 0.0)
         base = c.feed_forward * a_ff + c.kp * error
         saturated_up = base + c.ki * self.integral >= max_accel and error > 0.0
         saturated_down = base + c.ki * self.integral <= -max_decel and error < 0.0

@@ -59,6 +59,7 @@ from __future__ import annotations
 
 from conesim.planner.kernels.bridges import boundary_edges, delaunay_edges, find_bridges
 from conesim.planner.kernels.cone_points import ground_points, side_of_path, with_tips
+from conesim.planner.kernels.lane import lane_path, lane_room
 from conesim.planner.kernels.ordering import chain_nearest, ordered_midpoints, start_index
 from conesim.planner.kernels.partners import partner_points, partners_needed
 from conesim.planner.kernels.polyline import arc_length, crosses_boundary, polyline_crosses
@@ -87,6 +88,8 @@ __all__ = [
     "find_bridges",
     "ground_points",
     "in_view",
+    "lane_path",
+    "lane_room",
     "median",
     "nearest_segments",
     "ordered_midpoints",

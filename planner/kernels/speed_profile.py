@@ -49,7 +49,9 @@ def profile_limits(points, s, has_s, limits):
     The arc length (unless ``has_s``: then ``s`` (n,) [m]; ``numpy.cumsum``
     of the ``np.hypot`` steps), the Menger curvature, its window mean when
     ``limits.curvature_window > 0`` and n > 2, the curvature limit and the
-    jerk limit's ratio ``lateral_jerk_max / slope`` (inf where the slope is
+    jerk limit's ratio ``lateral_jerk_max / slope``, and the steering-rate
+    limit ``steering_rate_max (1 + (L kappa)^2) / (L slope |kappa| lock_radius)``
+    taken into the curvature limit (inf where the slope is
     0), each with the reference's operations in its order
     (``tests/planner/kernels/speed_profile_reference.py``). ``limits`` is a
     ``settings.LimitSettings``.
@@ -110,13 +112,20 @@ def profile_limits(points, s, has_s, limits):
                 hi = min(max(i + half + 1, 0), n)
                 smooth[i] = (c[hi] - c[lo]) / (hi - lo)
             kappa = smooth
+    lock = limits.lock_radius
+    share_min = limits.lock_share_min
     v = np.empty(n)
     for i in range(n):
         k = abs(kappa[i]) - a_lat_aero
-        v[i] = math.sqrt(a_lat / k) if k > floor else v_max
+        x = abs(kappa[i]) * lock
+        x = x * x
+        share = max(1.0 - x * x, share_min)
+        v[i] = math.sqrt(a_lat * share / k) if k > floor else v_max
     ratio = np.empty(0)
+    steer_rate = limits.steering_rate_max
+    wheelbase = limits.wheelbase
     half = _half_window(jerk_window, spacing, n, True) if n > 2 else 0
-    if jerk_max < math.inf and half >= 1 and n >= 2 * half + 1:
+    if (jerk_max < math.inf or steer_rate < math.inf) and half >= 1 and n >= 2 * half + 1:
         slope = np.zeros(n)
         run = 2 * half * spacing
         for i in range(half, n - half):
@@ -125,6 +134,15 @@ def profile_limits(points, s, has_s, limits):
             slope[i] = slope[half]
         for i in range(n - half, n):
             slope[i] = slope[n - half - 1]
+        if steer_rate < math.inf:
+            for i in range(n):
+                x = wheelbase * kappa[i]
+                q = abs(kappa[i]) * lock if lock > 0.0 else 1.0
+                if slope[i] > 0.0 and q > 0.0:
+                    lim = steer_rate * (1.0 + x * x) / (wheelbase * slope[i] * q)
+                    if lim < v[i]:  # noqa: PLR1730
+                        v[i] = lim
+    if jerk_max < math.inf and half >= 1 and n >= 2 * half + 1:
         ratio = np.empty(n)
         for i in range(n):
             # numpy's jerk_max / slope: +inf at a zero slope (jerk_max > 0)

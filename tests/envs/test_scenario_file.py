@@ -26,6 +26,7 @@ from conesim.planner import AutopilotConfig
 from conesim.sim.sensors import ConeFaults, Faults, GpsFaults, get_profile, override
 from conesim.sim.vehicle_params import VehicleParams
 from conesim.tracks import load_track
+from conesim.tracks.survey import PathSurvey
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "scenarios" / "example.yaml"
 
@@ -283,3 +284,14 @@ def test_the_readmes_example_loads() -> None:
     s = scenario_from_mapping(parse_yaml(block, "README.md")[0])
     assert s.track == "autocross" and s.faults.gps.dropouts == ((12.0, 14.0),)
     assert s.autopilot is not None and s.autopilot.classifier.mode == "colour"
+
+
+def test_global_path_survey_is_read_and_checked() -> None:
+    """``global_path: {noise, bias, seed}`` becomes a PathSurvey; a bad value is one line."""
+    s = scenario_from_mapping({"global_path": {"noise": 0.2, "bias": 0.3, "seed": 4}})
+    assert s.global_path == PathSurvey(0.2, 0.3, 4)
+    assert scenario_from_mapping({}).global_path.exact
+    with pytest.raises(FieldError, match=r"global_path.noise: PathSurvey.noise = -1.0"):
+        scenario_from_mapping({"global_path": {"noise": -1.0}})
+    with pytest.raises(FieldError, match="unknown key 'nois'; allowed keys: noise, bias, seed"):
+        scenario_from_mapping({"global_path": {"nois": 0.1}})

@@ -70,7 +70,8 @@ def test_transform_is_taken_at_the_detection_stamp(synth: ModuleType, straight) 
 
 
 def test_colour_mode_trusts_blue_and_yellow_only(synth: ModuleType, straight) -> None:
-    """Colour mode: blue left, yellow right even against the geometry; orange is geometric."""
+    """With the colour always deciding (``geometry_overrules`` inf): blue left, yellow
+    right even against the geometry; orange is geometric."""
     pose = Pose2D(0.0, 0.0, 0.0)
     scene = synth.make_scene(straight, pose, colours=True, extra=np.array([[6.0, -0.9]]))
     labels = list(scene.detections.colours)
@@ -78,8 +79,9 @@ def test_colour_mode_trusts_blue_and_yellow_only(synth: ModuleType, straight) ->
     labels[flipped] = "yellow"
     det = ConeDetections(scene.detections.header, scene.detections.points, tuple(labels))
     path = straight.global_path
-    geometric = classify_cones_by_side(det, scene.buffer, path)
-    colour = classify_cones_by_side(det, scene.buffer, path, ClassifierConfig(mode="colour"))
+    geometric = classify_cones_by_side(det, scene.buffer, path, ClassifierConfig(mode="geometric"))
+    always = ClassifierConfig(mode="colour", geometry_overrules=math.inf)
+    colour = classify_cones_by_side(det, scene.buffer, path, always)
     row = {int(i): k for k, i in enumerate(colour.index)}
     assert geometric.side[row[flipped]] == LEFT
     assert colour.side[row[flipped]] == RIGHT
@@ -88,6 +90,38 @@ def test_colour_mode_trusts_blue_and_yellow_only(synth: ModuleType, straight) ->
     assert not colour.by_colour[row[orange]]
     assert colour.side[row[orange]] == RIGHT  # y = -0.9: right of the path
     assert np.count_nonzero(colour.side != geometric.side) == 1
+
+
+def test_geometry_overrules_a_swapped_colour(synth: ModuleType, straight) -> None:
+    """The default colour mode: 5 % of the cones (1 in 20) with blue and yellow swapped.
+
+    A boundary cone of the 3 m lane stands 1.5 m from the global path, twice
+    the 0.75 m beyond which the geometry decides: every swapped cone keeps its
+    side. A yellow cone 0.5 m left of the path (within 0.75 m, where the map
+    is unsure) keeps its colour's side, right.
+    """
+    pose = Pose2D(0.0, 0.0, 0.0)
+    scene = synth.make_scene(straight, pose, colours=True, extra=np.array([[8.0, 0.5]]))
+    labels = list(scene.detections.colours)
+    named = [i for i, c in enumerate(labels) if c in ("blue", "yellow")]
+    swapped = named[::20]
+    for i in swapped:
+        labels[i] = "yellow" if labels[i] == "blue" else "blue"
+    extra = labels.index("orange")
+    labels[extra] = "yellow"
+    det = ConeDetections(scene.detections.header, scene.detections.points, tuple(labels))
+    path = straight.global_path
+    geometric = classify_cones_by_side(det, scene.buffer, path, ClassifierConfig(mode="geometric"))
+    colour = classify_cones_by_side(det, scene.buffer, path)
+    assert ClassifierConfig().mode == "colour"
+    row = {int(i): k for k, i in enumerate(colour.index)}
+    assert colour.colour_disagreements == len(swapped) + 1
+    for i in swapped:
+        assert abs(colour.offset[row[i]]) == pytest.approx(1.5, abs=0.01)
+        assert colour.side[row[i]] == geometric.side[row[i]]
+        assert not colour.by_colour[row[i]]
+    assert geometric.side[row[extra]] == LEFT
+    assert colour.side[row[extra]] == RIGHT and colour.by_colour[row[extra]]
 
 
 def test_colour_mode_without_colours_is_the_seed_rule(synth: ModuleType, circle) -> None:

@@ -17,11 +17,12 @@ def test_circle_speed_is_sqrt_a_lat_r_everywhere() -> None:
     """A closed circle of R = 10 m: sqrt(a_lat R) = sqrt(60) = 7.75 m/s at every station."""
     t = np.linspace(0.0, 2 * math.pi, 200, endpoint=False)
     path = global_path_from_centreline(np.column_stack([10 * np.cos(t), 10 * np.sin(t)]), True)
-    plan = GlobalSpeedPlan(path, SpeedProfileConfig(a_lat_max=6.0, a_lat_aero=0.0))
+    plan = GlobalSpeedPlan(path, SpeedProfileConfig(a_lat_max=6.0, a_lat_aero=0.0, lock_radius=0.0))
     for station in (0.0, 17.0, 40.0, plan.length + 3.0):
         assert_allclose(plan.speed_at(station), math.sqrt(6.0 * 10.0), rtol=1e-3)
     # With downforce, v^2 / R = 6 + 0.02 v^2: v = sqrt(6 / (0.1 - 0.02)) = 8.66 m/s.
-    aero = GlobalSpeedPlan(path, SpeedProfileConfig(a_lat_max=6.0, a_lat_aero=0.02))
+    aero_config = SpeedProfileConfig(a_lat_max=6.0, a_lat_aero=0.02, lock_radius=0.0)
+    aero = GlobalSpeedPlan(path, aero_config)
     assert_allclose(aero.speed_at(17.0), math.sqrt(6.0 / 0.08), rtol=1e-3)
     assert_allclose(plan.curvature_at(np.array([0.0, 17.0, plan.length + 3.0])), 0.1, rtol=1e-3)
 

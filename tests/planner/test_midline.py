@@ -32,6 +32,10 @@ from conesim.planner import (
 )
 from conesim.planner.spline import fit_path
 
+# The Delaunay midline itself: the body's room in the lane (``planner.lane``)
+# moves the path on purpose and is tested in test_lane.py.
+MIDLINE = MidlineConfig(keep_in_lane=False)
+
 
 def plan_scene(
     scene, classifier: ClassifierConfig | None = None, **kw
@@ -40,6 +44,7 @@ def plan_scene(
     cones = classify_cones_by_side(
         scene.detections, scene.buffer, scene.track.global_path, classifier
     )
+    kw.setdefault("config", MIDLINE)
     plan = reference_path_planning(cones, scene.buffer, **kw)
     in_ref = scene.buffer.transform_points("reference", "os_sensor", plan.path, plan.header.stamp)
     return plan, in_ref, cones
@@ -177,7 +182,8 @@ def test_misclassified_cone_in_the_marker(synth: ModuleType, straight) -> None:
     wrong = int(np.flatnonzero((cones.side == LEFT) & (cones.points[:, 0] == 10.0))[0])
     side = cones.side.copy()
     side[wrong] = RIGHT
-    plan = reference_path_planning(dataclasses.replace(cones, side=side), scene.buffer)
+    swapped = dataclasses.replace(cones, side=side)
+    plan = reference_path_planning(swapped, scene.buffer, config=MIDLINE)
     assert plan.status is PlanStatus.OK
     assert_allclose(plan.path[:, 1], 0.0, atol=0.05)
 
@@ -248,7 +254,7 @@ def test_fallback_carries_the_previous_path_into_the_current_frame(
     synth.set_pose(buffer, pose_2, 1.1)
     lone = synth.detect(straight.left[3:4], pose_2, 1.1)  # one cone and its virtual partner
     cones = classify_cones_by_side(lone, buffer, straight.global_path)
-    plan = reference_path_planning(cones, buffer, previous=good)
+    plan = reference_path_planning(cones, buffer, previous=good, config=MIDLINE)
     assert plan.status is PlanStatus.FALLBACK and plan.fallback
     assert plan.reason == "1 ordered midpoints (need 2)"
     assert_allclose(plan.path, good.path - [1.0, 0.2], atol=1e-12)
@@ -271,7 +277,7 @@ def test_without_a_previous_path_the_plan_fails(synth: ModuleType, straight) -> 
     scene = synth.make_scene(straight, Pose2D(0.0, 0.0, 0.0))
     empty = ConeDetections(Header(scene.stamp, "os_sensor"), np.zeros((0, 3)))
     cones = classify_cones_by_side(empty, scene.buffer, straight.global_path)
-    plan = reference_path_planning(cones, scene.buffer)
+    plan = reference_path_planning(cones, scene.buffer, config=MIDLINE)
     assert plan.status is PlanStatus.FAILED
     assert plan.path.shape == (0, 2) and plan.speeds.shape == (0,)
 
@@ -286,7 +292,7 @@ def test_fallback_drops_what_lies_behind(synth: ModuleType, straight) -> None:
         first.buffer,
         straight.global_path,
     )
-    plan = reference_path_planning(cones, first.buffer, previous=good)
+    plan = reference_path_planning(cones, first.buffer, previous=good, config=MIDLINE)
     assert plan.status is PlanStatus.FALLBACK
     assert_allclose(plan.path[0], [0.0, 0.0], atol=1e-12)  # old x = 6 m, now beside the car
     assert_allclose(plan.path[-1], good.path[-1] - [6.0, 0.0], atol=1e-12)
@@ -374,7 +380,7 @@ def test_global_path_off_the_middle(synth: ModuleType, straight, shift: float) -
     shifted = dataclasses.replace(straight, centre=straight.centre + np.array([0.0, shift]))
     cones = classify_cones_by_side(scene.detections, scene.buffer, shifted.global_path)
     assert_allclose(np.abs(cones.offset - cones.side * 1.5), abs(shift), atol=1e-8)
-    plan = reference_path_planning(cones, scene.buffer)
+    plan = reference_path_planning(cones, scene.buffer, config=MIDLINE)
     assert plan.status is PlanStatus.OK
     assert plan.track.centre == pytest.approx(-shift) and plan.track.width == pytest.approx(3.0)
     assert plan.dropped == 4  # only the cones behind min_x
@@ -392,5 +398,5 @@ def test_fallback_fails_when_the_old_stamp_left_the_cache(synth: ModuleType, str
     synth.set_pose(buffer, Pose2D(1.0, 0.0, 0.0), 2.5)  # drops the sample at 1.0 s
     empty = ConeDetections(Header(2.5, "os_sensor"), np.zeros((0, 3)))
     cones = classify_cones_by_side(empty, buffer, straight.global_path)
-    plan = reference_path_planning(cones, buffer, previous=good)
+    plan = reference_path_planning(cones, buffer, previous=good, config=MIDLINE)
     assert plan.status is PlanStatus.FAILED and len(plan.path) == 0

@@ -18,9 +18,11 @@ from numpy.testing import assert_allclose, assert_array_equal
 from conesim.planner import SpeedProfileConfig, speed_profile
 from conesim.planner.speed_profile import forward_pass, profile_curvature
 
-# The worked numbers use 6 m/s^2 lateral and braking and no friction ellipse
-# (tested on its own below).
+# The worked numbers use 6 m/s^2 lateral and braking, no friction ellipse and
+# no cut near full lock (each tested on its own).
 LIMITS = {
+    "lock_radius": 0.0,
+    "steering_rate_max": math.inf,
     "a_lat_max": 6.0,
     "a_lat_aero": 0.0,
     "a_brake": 6.0,
@@ -129,6 +131,7 @@ def test_curvature_window_averages_wiggles_but_keeps_a_circle() -> None:
     x = np.arange(0.0, 30.0, 0.5)
     zigzag = np.column_stack([x, 0.02 * (-1.0) ** np.arange(len(x))])
     free = {**LIMITS, "a_drive": 1000.0, "a_brake": 1000.0, "horizon_stop": False}
+    free = {**free, "lock_radius": 0.0}
     point_by_point = speed_profile(zigzag, SpeedProfileConfig(curvature_window=0.0, **free))
     windowed = speed_profile(zigzag, SpeedProfileConfig(curvature_window=3.2, **free))
     k = abs(profile_curvature(zigzag, POINTWISE)[10])

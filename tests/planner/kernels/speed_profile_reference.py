@@ -56,10 +56,43 @@ def window_mean(values: FloatArray, spacing: float, window: float) -> FloatArray
 
 
 def curvature_limit(kappa: FloatArray, config: SpeedProfileConfig) -> FloatArray:
-    """Step 2: min(v_max, sqrt(a_lat_max / (|kappa| - a_lat_aero))) [m/s], shape of ``kappa``."""
+    """Step 2: min(v_max, sqrt(a_lat_max share / (|kappa| - a_lat_aero))) [m/s], shape of
+    ``kappa``, share = max(1 - (|kappa| lock_radius)^4, lock_share_min)."""
     k = np.abs(kappa) - config.a_lat_aero
     floor = config.a_lat_max / config.v_max**2  # below this, v_max binds
-    return np.where(k > floor, np.sqrt(config.a_lat_max / np.maximum(k, floor)), config.v_max)
+    x = np.abs(kappa) * config.lock_radius
+    x = x * x
+    share = np.maximum(1.0 - x * x, config.lock_share_min)
+    a_lat = config.a_lat_max * share
+    return np.where(k > floor, np.sqrt(a_lat / np.maximum(k, floor)), config.v_max)
+
+
+def _slope(kappa: FloatArray, spacing: float, half: int) -> FloatArray:
+    """|dkappa/ds| (n,) [1/m^2] over 2 half samples, the ends held."""
+    n = len(kappa)
+    slope = np.zeros(n)
+    slope[half:-half] = np.abs(kappa[2 * half :] - kappa[: -2 * half]) / (2 * half * spacing)
+    slope[:half], slope[-half:] = slope[half], slope[-half - 1]
+    return slope
+
+
+def steering_limit(
+    kappa: FloatArray, spacing: float, config: SpeedProfileConfig
+) -> FloatArray | None:
+    """Step 2c: steering_rate_max (1 + (L kappa)^2) / (L |dkappa/ds| |kappa| R_lock)
+    [m/s] (n,): delta = atan(L kappa) changes at v L kappa' / (1 + (L kappa)^2),
+    weighed by how near full lock the path turns."""
+    n = len(kappa)
+    half = round(config.jerk_window / (2.0 * spacing)) if spacing > 0.0 else 0
+    if not config.steering_rate_max < math.inf or half < 1 or n < 2 * half + 1:
+        return None
+    slope = _slope(kappa, spacing, half)
+    x = config.wheelbase * kappa
+    lock = config.lock_radius
+    q = np.abs(kappa) * lock if lock > 0.0 else np.ones_like(kappa)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lim = config.steering_rate_max * (1.0 + x * x) / (config.wheelbase * slope * q)
+    return np.where((slope > 0.0) & (q > 0.0), lim, np.inf)
 
 
 def jerk_limit(kappa: FloatArray, spacing: float, config: SpeedProfileConfig) -> FloatArray | None:
@@ -173,6 +206,9 @@ def ref_speed_profile(
     if config.curvature_window > 0.0 and n > 2:
         kappa = window_mean(kappa, float(s[-1]) / (n - 1), config.curvature_window)
     v = curvature_limit(kappa, config)
+    steer = steering_limit(kappa, float(s[-1]) / (n - 1), config) if n > 2 else None
+    if steer is not None:
+        v = np.minimum(v, steer)
     jerk = jerk_limit(kappa, float(s[-1]) / (n - 1), config) if n > 2 else None
     if jerk is not None:
         v = np.minimum(v, jerk)

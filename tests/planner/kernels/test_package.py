@@ -53,7 +53,7 @@ with warnings.catch_warnings(record=True) as caught:
 import numpy as np
 owners = {str(w.message).split(":")[0] for w in caught if "no writable cache" in str(w.message)}
 modules = {f"conesim.planner.kernels.{m.name}" for m in pkgutil.iter_modules(kernels.__path__)}
-assert len(modules) == 10, modules
+assert len(modules) == 11, modules
 expected = modules | {"conesim.planner.kernel_chains", "conesim.localization.ekf.kernels"}
 assert owners == expected, caught
 assert kernels.arc_length(np.array([[0.0, 0.0], [3.0, 4.0]])).tolist() == [0.0, 5.0]

@@ -251,10 +251,22 @@ def test_reference_friction_ellipse_brakes_less_in_the_corner() -> None:
     )
 
 
+def test_reference_curvature_limit_near_full_lock() -> None:
+    """R 4 m with a 3 m lock radius: share 1 - 0.75^4 = 0.6836, v = sqrt(14 * 0.6836 * 4)
+    = 6.187 m/s; at R 3 m the share is lock_share_min 0.15: v = sqrt(14 * 0.15 * 3)."""
+    cfg = SpeedProfileConfig(a_lat_max=14.0, a_lat_aero=0.0, lock_radius=3.0)
+    v = ref.curvature_limit(np.array([0.25, -1.0 / 3.0]), cfg)
+    assert_allclose(v, [math.sqrt(14.0 * (1.0 - 0.75**4) * 4.0), math.sqrt(6.3)], rtol=1e-12)
+    p = np.column_stack([4.0 * np.cos(np.linspace(0, 2, 40)), 4.0 * np.sin(np.linspace(0, 2, 40))])
+    compiled = speed_profile(p, SpeedProfileConfig(a_lat_aero=0.0, curvature_window=0.0,
+                             lateral_jerk_max=math.inf, horizon_stop=False))  # fmt: skip
+    assert_allclose(compiled[5:-5], 6.187, atol=2e-3)
+
+
 def test_reference_curvature_limit_with_downforce() -> None:
     """v^2 |kappa| = a_lat_max + a_lat_aero v^2: |kappa| = 0.05 1/m, 6 m/s^2, 0.01 1/m
     gives v = sqrt(6 / (0.05 - 0.01)) = 12.247 m/s; |kappa| <= 0.0167 1/m, v_max."""
-    cfg = SpeedProfileConfig(a_lat_max=6.0, a_lat_aero=0.01, v_max=30.0)
+    cfg = SpeedProfileConfig(a_lat_max=6.0, a_lat_aero=0.01, v_max=30.0, lock_radius=0.0)
     v = ref.curvature_limit(np.array([0.05, -0.05, 0.01, 0.0]), cfg)
     assert_allclose(v[:2], math.sqrt(150.0), rtol=1e-12)
     assert_allclose(v[2:], 30.0)
