@@ -54,7 +54,7 @@ conesim_sweep: 1
 base: {laps: 2, localization: fused, sensors: rtk}
 axes:
   track: [autocross, trackdrive]
-  seed: {range: [0, 6]}
+  seed: {range: [0, SEEDS]}
 """
 WORKERS = 2
 
@@ -85,6 +85,7 @@ def main() -> None:
     """Print the figures."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--seeds", type=int, default=6, help="seeds per track (runs: 2 x this)")
     args = parser.parse_args()
     import ray
 
@@ -94,7 +95,7 @@ def main() -> None:
     ray_start: list[float] = []
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "sweep.yaml"
-        path.write_text(SWEEP)
+        path.write_text(SWEEP.replace("SEEDS", str(args.seeds)))
         for repeat in range(args.repeats):
             out = Path(tmp) / str(repeat)
             figures["serial"].append(timed_sweep(path, out / "serial", workers=1))
@@ -111,7 +112,8 @@ def main() -> None:
     after, load1 = pymunk_reference(), os.getloadavg()[0]
     med = {k: {f: statistics.median(r[f] for r in v) for f in v[0]} for k, v in figures.items()}
     print(
-        f"sweep of 12 runs (autocross, trackdrive x 6 seeds, 2 laps, fused, no pictures), "
+        f"sweep of {2 * args.seeds} runs (autocross, trackdrive x {args.seeds} seeds, 2 laps, "
+        "fused, no pictures), "
         f"median of {args.repeats} interleaved repeats"
     )
     print(f"  reference, bare pymunk: {before:,.0f} steps/s before, {after:,.0f} after")
