@@ -1,7 +1,7 @@
 """Sweep throughput: the same sweep serial, on a 2-process pool, and on a 2-CPU local Ray.
 
-The sweep: 12 runs of the kind a driving sweep is made of (autocross and
-trackdrive x seeds 0-5, two laps, fused localization, rtk sensors; about a
+The sweep: 24 runs of the kind a driving sweep is made of (autocross and
+trackdrive x seeds 0-11, two laps, fused localization, rtk sensors; about a
 second each here), with no pictures: drawing ``run.png`` is the same work
 on every executor. Each
 repeat runs the three executors one after the other (interleaved: this
@@ -30,7 +30,7 @@ pool. A reference measured in the same run, before and after: bare pymunk
 steps per second (``write_results.pymunk_reference``).
 
 Run: ``.venv/bin/python benchmarks/bench_sweep.py [--repeats N]`` (about
-3 minutes with 3 repeats on 2 idle cores).
+5 minutes with 3 repeats on 2 idle cores; ``--seeds`` sets the length).
 """
 
 from __future__ import annotations
@@ -85,7 +85,7 @@ def main() -> None:
     """Print the figures."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--seeds", type=int, default=6, help="seeds per track (runs: 2 x this)")
+    parser.add_argument("--seeds", type=int, default=12, help="seeds per track (runs: 2 x this)")
     args = parser.parse_args()
     import ray
 
