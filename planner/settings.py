@@ -146,6 +146,8 @@ class LimitSettings(NamedTuple):
             limit shrinks towards it (0: never).
         lock_share_min: the least share of the lateral limit left there [-].
         steering_rate_max: the steering-rate limit [rad/s]; inf: none.
+        steering_weight_min: the least weight of the steering-rate limit,
+            away from full lock [-].
         wheelbase: the car's wheelbase L [m], for it.
     """
 
@@ -159,6 +161,7 @@ class LimitSettings(NamedTuple):
     lock_radius: float
     lock_share_min: float
     steering_rate_max: float
+    steering_weight_min: float
     wheelbase: float
 
 

@@ -124,6 +124,7 @@ def profile_limits(points, s, has_s, limits):
     ratio = np.empty(0)
     steer_rate = limits.steering_rate_max
     wheelbase = limits.wheelbase
+    weight_min = limits.steering_weight_min
     half = _half_window(jerk_window, spacing, n, True) if n > 2 else 0
     if (jerk_max < math.inf or steer_rate < math.inf) and half >= 1 and n >= 2 * half + 1:
         slope = np.zeros(n)
@@ -137,7 +138,7 @@ def profile_limits(points, s, has_s, limits):
         if steer_rate < math.inf:
             for i in range(n):
                 x = wheelbase * kappa[i]
-                q = abs(kappa[i]) * lock if lock > 0.0 else 1.0
+                q = max(abs(kappa[i]) * lock, weight_min) if lock > 0.0 else 1.0
                 if slope[i] > 0.0 and q > 0.0:
                     lim = steer_rate * (1.0 + x * x) / (wheelbase * slope[i] * q)
                     if lim < v[i]:  # noqa: PLR1730
