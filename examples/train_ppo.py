@@ -108,7 +108,8 @@ PPO_SETTINGS: dict[str, Any] = {
     "ent_coef": 0.0,
     "policy_kwargs": {"net_arch": [64, 64], "log_std_init": -0.5},
 }
-"""PPO's hyperparameters (``--n-steps`` and ``--batch-size`` change the first two)."""
+"""PPO's hyperparameters (``--n-steps``, ``--batch-size``, ``--gamma`` and
+``--ent-coef`` change theirs)."""
 
 CURVE_FIELDS = ("step", "return", "progress_m", "laps", "speed_mps", "end_reason")
 
@@ -331,6 +332,8 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--vec", choices=("subproc", "dummy"), default="dummy")
     p.add_argument("--n-steps", type=int, default=PPO_SETTINGS["n_steps"])
     p.add_argument("--batch-size", type=int, default=PPO_SETTINGS["batch_size"])
+    p.add_argument("--gamma", type=float, default=PPO_SETTINGS["gamma"])
+    p.add_argument("--ent-coef", type=float, default=PPO_SETTINGS["ent_coef"])
     p.add_argument("--train-seeds", type=int, nargs=2, default=(0, 1000), metavar=("LO", "HI"))
     p.add_argument("--eval-seed0", type=int, default=1000)
     p.add_argument("--eval-tracks", type=int, default=20)
@@ -349,8 +352,14 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
         if args.vec == "subproc"
         else DummyVecEnv(factories)
     )
-    venv = VecNormalize(VecMonitor(venv), norm_obs=False, norm_reward=True, gamma=0.99)
-    settings = {**PPO_SETTINGS, "n_steps": args.n_steps, "batch_size": args.batch_size}
+    venv = VecNormalize(VecMonitor(venv), norm_obs=False, norm_reward=True, gamma=args.gamma)
+    settings = {
+        **PPO_SETTINGS,
+        "n_steps": args.n_steps,
+        "batch_size": args.batch_size,
+        "gamma": args.gamma,
+        "ent_coef": args.ent_coef,
+    }
     model = PPO("MlpPolicy", venv, seed=args.seed, verbose=0, device="cpu", **settings)
     budget_s = None if args.minutes <= 0 else args.minutes * 60.0
     total = args.steps if args.steps is not None else 10**9
