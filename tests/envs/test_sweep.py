@@ -40,9 +40,10 @@ axes:
   seed: {range: [0, 4]}
 """
 """4 quick runs (about 0.4 s each, and a picture)."""
-KILLED_RUNS = 16
+KILLED_RUNS = 24
 LONGER = QUICK.replace("range: [0, 4]", f"range: [0, {KILLED_RUNS}]")
-"""16 of them: a sweep still busy when the test's signal lands, on any machine."""
+"""24 of them: a sweep still busy when the test's signal lands, on any machine
+(16 finished before it on a busy 2-core machine, the test starved of time)."""
 
 
 def comparable(out: Path) -> dict[str, Any]:
@@ -219,7 +220,7 @@ def test_killed_sweep_resumes(tmp_path: Path, sig: signal.Signals, workers: str)
         command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True
     )
     try:
-        wait_for_rows(out, 2, proc)
+        wait_for_rows(out, 1, proc)
         if sig == signal.SIGKILL:
             os.killpg(proc.pid, sig)
         else:
@@ -230,10 +231,10 @@ def test_killed_sweep_resumes(tmp_path: Path, sig: signal.Signals, workers: str)
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
     if sig == signal.SIGINT:
-        assert proc.returncode == 130
+        assert proc.returncode == 130, err.decode()[-500:]
         assert b"interrupted; the runs finished are in" in err
     done = len(read_rows(out / RESULTS))  # a row cut short by the signal is not one
-    assert 2 <= done < KILLED_RUNS
+    assert 1 <= done < KILLED_RUNS
     again = subprocess.run(command, capture_output=True, text=True, check=False)
     assert again.returncode == 0, again.stderr
     n = KILLED_RUNS
