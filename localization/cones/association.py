@@ -5,10 +5,12 @@
    returns the map cones within a radius that bounds its gate (the trace of
    its innovation covariance, capped at ``max_search_radius``).
 2. **Mahalanobis gate.** Each (detection, cone) pair's innovation
-   nu = w_i - m_j, with S = A P A' + R(yaw) R_i R(yaw)' where A = [-I, a],
-   a = (d_y, -d_x), d = m_j - p, is the sensor-frame innovation rotated into
-   ``reference`` (the same d^2 = nu' S^-1 nu). Pairs beyond
-   ``chi2.ppf(gate_probability, 2)`` are out.
+   nu = w_i - (m_j + b), with S = A P A' + R(yaw) R_i R(yaw)' where
+   A = [-I, a, I] over (x, y, yaw, map_bias), a = (d_y, -d_x),
+   d = m_j + b - p, is the sensor-frame innovation rotated into
+   ``reference`` (the same d^2 = nu' S^-1 nu; b and its column only with a
+   map offset in the state). Pairs beyond ``chi2.ppf(gate_probability, 2)``
+   are out.
 3. **Colours.** With ``use_colours``, a detection that reports a colour
    keeps only cones of its class (a big orange cone is orange; ``unknown``
    matches any).
@@ -89,18 +91,20 @@ def _candidates(lmap: LandmarkMap, w: FloatArray, radius: FloatArray) -> tuple[I
 
 
 def _mahalanobis(
-    pose: FloatArray, p3: FloatArray, w: FloatArray, rw: FloatArray, cones: FloatArray
+    pose: FloatArray, pk: FloatArray, w: FloatArray, rw: FloatArray, cones: FloatArray
 ) -> FloatArray:
     """d^2 of each pair: detection at ``w`` (q, 2) with world covariance ``rw``
-    (q, 2, 2) against map cone ``cones`` (q, 2) (module docstring, step 2)."""
+    (q, 2, 2) against map cone ``cones`` (q, 2), offset included (module
+    docstring, step 2); ``pk``: P over (x, y, yaw[, map_bias]), (3, 3) or (5, 5)."""
     d = cones - pose[:2]
-    a0, a1 = d[:, 1], -d[:, 0]
-    pxx, pxy, pyy = p3[0, 0], p3[0, 1], p3[1, 1]
-    pxt, pyt, ptt = p3[0, 2], p3[1, 2], p3[2, 2]
-    s00 = pxx - 2.0 * pxt * a0 + ptt * a0 * a0 + rw[:, 0, 0]
-    s11 = pyy - 2.0 * pyt * a1 + ptt * a1 * a1 + rw[:, 1, 1]
-    s01 = pxy - pxt * a1 - pyt * a0 + ptt * a0 * a1 + rw[:, 0, 1]
+    a = np.zeros((len(cones), 2, len(pk)))
+    a[:, 0, 0] = a[:, 1, 1] = -1.0
+    a[:, 0, 2], a[:, 1, 2] = d[:, 1], -d[:, 0]
+    if len(pk) == 5:
+        a[:, 0, 3] = a[:, 1, 4] = 1.0
+    s = np.einsum("qik,kl,qjl->qij", a, pk, a) + rw
     n0, n1 = w[:, 0] - cones[:, 0], w[:, 1] - cones[:, 1]
+    s00, s01, s11 = s[:, 0, 0], s[:, 0, 1], s[:, 1, 1]
     det = s00 * s11 - s01 * s01
     return (n0 * n0 * s11 - 2.0 * n0 * n1 * s01 + n1 * n1 * s00) / det
 
@@ -162,6 +166,7 @@ def associate(
     lmap: LandmarkMap,
     cfg: ConeUpdateConfig,
     gate: float,
+    bias: int | None = None,
 ) -> Association:
     """Match a scan's detections to map cones (module docstring).
 
@@ -174,25 +179,29 @@ def associate(
         lmap: the map.
         cfg: the settings.
         gate: the pairs' chi-square gate (2 dof).
+        bias: the index of ``map_bias_e`` in ``x``, or None.
     """
     k = len(points)
     pose = np.array([x.item(X), x.item(Y), x.item(YAW)])
-    idx = [X, Y, YAW]
-    p3 = p[np.ix_(idx, idx)]
+    idx = [X, Y, YAW] if bias is None else [X, Y, YAW, bias, bias + 1]
+    pk = p[np.ix_(idx, idx)]
+    p3 = pk[:3, :3]
+    shift = np.zeros(2) if bias is None else np.array([x.item(bias), x.item(bias + 1)])
     rot = _rotation(float(pose[2]))
-    w = pose[:2] + (points + np.asarray(cfg.sensor_offset)) @ rot.T
+    w = pose[:2] + (points + np.asarray(cfg.sensor_offset)) @ rot.T - shift  # on the map
     rw = np.einsum("ij,qjk,lk->qil", rot, cov, rot)
     rho = np.hypot(w[:, 0] - pose[0], w[:, 1] - pose[1])
     reach = rho + 1.0
     bound = (
         p3[0, 0] + p3[1, 1] + p3[2, 2] * reach * reach
         + 2.0 * math.hypot(p3[0, 2], p3[1, 2]) * reach + rw[:, 0, 0] + rw[:, 1, 1]
+        + 2.0 * float(np.trace(pk[3:, 3:]))
     )  # fmt: skip
     radius = np.minimum(np.sqrt(gate * bound), cfg.max_search_radius)
     det, cone = _candidates(lmap, w, radius)
     counts = ConeCounts(scans=1)
     if len(det):
-        d2 = _mahalanobis(pose, p3, w[det], rw[det], lmap.positions[cone])
+        d2 = _mahalanobis(pose - [*shift, 0.0], pk, w[det], rw[det], lmap.positions[cone])
         gated = d2 <= gate
         det, cone = det[gated], cone[gated]
     has_geo = np.zeros(k, dtype=bool)
@@ -208,7 +217,8 @@ def associate(
     if len(det) and (np.bincount(det).max() > 1 or np.bincount(cone).max() > 1):
         offset = lmap.positions[cone] - w[det]
         tolerance = cfg.consensus_tolerance + math.sqrt(max(p3[2, 2], 0.0)) * rho[det]
-        prior_inv = np.asarray(np.linalg.inv(p3[:2, :2] + 1e-9 * np.eye(2)), dtype=np.float64)
+        spread = p3[:2, :2] + pk[3:, 3:] if bias is not None else p3[:2, :2]
+        prior_inv = np.asarray(np.linalg.inv(spread + 1e-9 * np.eye(2)), dtype=np.float64)
         det, cone = _consensus(det, cone, offset, tolerance=tolerance, prior_inv=prior_inv, k=k)
         if len(det) < cfg.min_consensus:
             det, cone = _NONE, _NONE

@@ -16,6 +16,8 @@ class ConeUpdateConfig:
         range_sigma: the detector's range noise [m] (its datasheet; the sensors' config).
         bearing_sigma: the detector's bearing noise [rad].
         map_sigma: each map cone's survey error per axis assumed [m].
+        map_bias_sigma: the whole map's offset assumed, per axis [m]; > 0 puts
+            it in the filter's state (``localization.ekf.model``).
         min_range: nearest range the detector sees [m] (for counting misses).
         max_range: farthest range the detector sees [m].
         fov: the detector's field of view [rad].
@@ -35,6 +37,7 @@ class ConeUpdateConfig:
     range_sigma: float = 0.05  # [m]
     bearing_sigma: float = 0.007  # [rad]
     map_sigma: float = 0.03  # [m]
+    map_bias_sigma: float = 0.02  # [m]
     min_range: float = 0.0  # [m]
     max_range: float = 15.0  # [m]
     fov: float = math.pi  # [rad]
@@ -51,6 +54,7 @@ class ConeUpdateConfig:
             "range_sigma",
             "bearing_sigma",
             "map_sigma",
+            "map_bias_sigma",
             "min_range",
             "consensus_tolerance",
         ):

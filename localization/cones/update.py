@@ -21,6 +21,7 @@ from conesim.localization.cones.observation import (
 )
 from conesim.localization.ekf.health import RejectReason, Sensor
 from conesim.localization.ekf.measurements import InvalidMessage, Measurement
+from conesim.localization.ekf.model import StateLayout
 from conesim.localization.frames.transform import strip_leading_slash
 
 FloatArray = NDArray[np.float64]
@@ -94,20 +95,25 @@ class ConeUpdate:
         cov.setflags(write=False)
         return Measurement(Sensor.CONES, stamp, points, cov, msg.colours)
 
-    def associate(self, x: FloatArray, p: FloatArray, meas: Measurement) -> Association:
-        """Match the scan's detections to the map with the prior (x, P)."""
+    def associate(
+        self, x: FloatArray, p: FloatArray, meas: Measurement, layout: StateLayout
+    ) -> Association:
+        """Match the scan's detections to the map with the prior (x, P) on ``layout``."""
         classes = None if meas.labels is None else colour_classes(meas.labels)
         return associate(
             x, p, meas.z, meas.cov, classes=classes, lmap=self.landmarks,
-            cfg=self.config, gate=self.pair_gate,
+            cfg=self.config, gate=self.pair_gate, bias=layout.map_bias_index,
         )  # fmt: skip
 
-    def model(self, x: FloatArray, meas: Measurement, found: Association) -> StackedModel:
+    def model(
+        self, x: FloatArray, meas: Measurement, found: Association, layout: StateLayout
+    ) -> StackedModel:
         """z, h(x), H and R of the associated detections, stacked."""
         cones = self.landmarks.positions[found.landmarks]
+        bias = layout.map_bias_index
         return StackedModel(
             z=meas.z[found.detections].reshape(-1, 1),
-            hx=h_cones(x, cones, self.config.sensor_offset),
-            jacobian=jacob_h_cones(x, cones, x.shape[0]),
+            hx=h_cones(x, cones, self.config.sensor_offset, bias),
+            jacobian=jacob_h_cones(x, cones, layout.n, bias),
             cov=block_diagonal(meas.cov[found.detections]),
         )

@@ -66,6 +66,7 @@ formulation (``tests/localization/test_ekf_regression.py``):
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from typing import TYPE_CHECKING, Any
@@ -174,9 +175,10 @@ class FusionEkf:
     def __init__(self, config: EkfConfig | None = None, cones: ConeUpdate | None = None) -> None:
         self.config = config or EkfConfig()
         self._cones = cones
-        self.layout = self.config.layout
+        map_bias = cones is not None and cones.config.map_bias_sigma > 0.0
+        self.layout = dataclasses.replace(self.config.layout, map_bias=map_bias)
         self._health = Health()
-        self._process = self.config.process_model()
+        self._process = self.config.process_model(self.layout)
         self._step = m.MotionStep(self._process)
         kernels.warm_up(self._step, NO_IMU_INPUT, NO_IMU_COV)
         self._gates = {dof: float(chi2.ppf(self.config.gate_probability, dof)) for dof in (1, 2)}
@@ -417,6 +419,9 @@ class FusionEkf:
             p[m.YAW, m.YAW] += sh2
             p[h, h] = sh2
             p[m.YAW, h] = p[h, m.YAW] = -sh2
+        b = self.layout.map_bias_index
+        if b is not None and self._cones is not None:
+            p[b : b + 2, b : b + 2] = self._cones.config.map_bias_sigma**2 * np.eye(2)
         return x, p
 
     # -- the history -------------------------------------------------------------------------
@@ -534,7 +539,7 @@ class FusionEkf:
         cones = self._cones
         assert cones is not None  # cone measurements are made only with a map
         ekf = self._ekf
-        found = cones.associate(ekf.x, ekf.P, meas)
+        found = cones.associate(ekf.x, ekf.P, meas, self.layout)
         counts = found.counts
         if not len(found):
             detail = f"none of {len(meas.z)} detections associated"
@@ -542,7 +547,7 @@ class FusionEkf:
             return UpdateResult(
                 Sensor.CONES, meas.stamp, False, RejectReason.NO_ASSOCIATION, cones=counts
             )
-        model = cones.model(ekf.x, meas, found)
+        model = cones.model(ekf.x, meas, found, self.layout)
         jac = model.jacobian
         y = model.z - model.hx
         s = np.dot(jac, ekf.P).dot(jac.T) + model.cov

@@ -1,8 +1,9 @@
 """The cone updates' NIS inside its chi-square band: a synthetic Monte Carlo and closed loops.
 
 Synthetic: 200 scans of the 10-cone lane, each from a prior drawn from the
-filter's own covariance (0.3 m, 1 deg), the map surveyed with the 3 cm the
-filter assumes, the detections with the detector's range and bearing noise.
+filter's own covariance (0.3 m, 1 deg), the map surveyed with the 3 cm per
+cone and the 2 cm offset the filter assumes, the detections with the
+detector's range and bearing noise.
 The sum of the NIS is chi2(sum of the dof): its mean per dof lies in
 [chi2.ppf(0.025, D) / D, chi2.ppf(0.975, D) / D], for D = 4000 about
 [0.957, 1.044], and about 95 % of the scans lie in their own 95 % band.
@@ -36,7 +37,8 @@ def test_nis_of_cone_updates_in_its_chi_square_band() -> None:
     truth_map = lane_map()
     nis, dof, inside = 0.0, 0, 0
     for _ in range(RUNS):
-        surveyed = truth_map.positions + cfg.map_sigma * rng.standard_normal((10, 2))
+        offset = cfg.map_bias_sigma * rng.standard_normal(2)
+        surveyed = truth_map.positions + offset + cfg.map_sigma * rng.standard_normal((10, 2))
         update = ConeUpdate(LandmarkMap(surveyed, ["unknown"] * 10), cfg)
         truth = Pose2D(*(rng.standard_normal(3) * [2.0, 2.0, 0.05]))
         err = rng.standard_normal(3) * [SIGMA_XY, SIGMA_XY, SIGMA_YAW]
@@ -48,7 +50,7 @@ def test_nis_of_cone_updates_in_its_chi_square_band() -> None:
         nis += result.nis
         dof += result.dof
         inside += chi2.ppf(0.025, result.dof) <= result.nis <= chi2.ppf(0.975, result.dof)
-    assert dof == RUNS * 20
+    assert dof >= 0.99 * RUNS * 20  # a detection beyond its 99.9 % gate is left out
     assert chi2.ppf(0.025, dof) / dof <= nis / dof <= chi2.ppf(0.975, dof) / dof
     assert inside / RUNS >= 0.9
 
