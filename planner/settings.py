@@ -146,6 +146,8 @@ class LimitSettings(NamedTuple):
             limit shrinks towards it (0: never).
         lock_share_min: the least share of the lateral limit left there [-].
         steering_rate_max: the steering-rate limit [rad/s]; inf: none.
+        steering_weight_min: the least weight of the steering-rate limit,
+            away from full lock [-].
         wheelbase: the car's wheelbase L [m], for it.
     """
 
@@ -159,6 +161,7 @@ class LimitSettings(NamedTuple):
     lock_radius: float
     lock_share_min: float
     steering_rate_max: float
+    steering_weight_min: float
     wheelbase: float
 
 
@@ -174,6 +177,8 @@ class PassSettings(NamedTuple):
         horizon_stop: the last waypoint's speed is 0 (or the given end speed).
         brake: the brake pass runs (False: the drive pass alone, for
             ``speed_profile.forward_pass``).
+        brake_lateral_share: the brake pass's ellipse takes this share of
+            the lateral limit as its whole [-] (1: the same ellipse).
     """
 
     friction_ellipse: bool
@@ -183,6 +188,7 @@ class PassSettings(NamedTuple):
     a_lat_aero: float
     horizon_stop: bool
     brake: bool
+    brake_lateral_share: float = 1.0
 
 
 class LaneSettings(NamedTuple):

@@ -124,6 +124,7 @@ def profile_limits(points, s, has_s, limits):
     ratio = np.empty(0)
     steer_rate = limits.steering_rate_max
     wheelbase = limits.wheelbase
+    weight_min = limits.steering_weight_min
     half = _half_window(jerk_window, spacing, n, True) if n > 2 else 0
     if (jerk_max < math.inf or steer_rate < math.inf) and half >= 1 and n >= 2 * half + 1:
         slope = np.zeros(n)
@@ -137,7 +138,7 @@ def profile_limits(points, s, has_s, limits):
         if steer_rate < math.inf:
             for i in range(n):
                 x = wheelbase * kappa[i]
-                q = abs(kappa[i]) * lock if lock > 0.0 else 1.0
+                q = max(abs(kappa[i]) * lock, weight_min) if lock > 0.0 else 1.0
                 if slope[i] > 0.0 and q > 0.0:
                     lim = steer_rate * (1.0 + x * x) / (wheelbase * slope[i] * q)
                     if lim < v[i]:  # noqa: PLR1730
@@ -220,10 +221,13 @@ def profile_passes(s, kappa, v, jerk, has_start, v_start, has_end, v_end, passes
         return v
     out = np.empty(n)
     if ellipse:
+        share = passes.brake_lateral_share
+        brake_lat = a_lat * share
+        brake_aero = a_lat_aero * share
         out[n - 1] = v[n - 1]
         for i in range(n - 2, -1, -1):
             u = out[i + 1]
-            a = a_brake * _ellipse_scale(u, kappa[i], a_lat, a_lat_aero)
+            a = a_brake * _ellipse_scale(u, kappa[i], brake_lat, brake_aero)
             x = math.sqrt(u * u + 2.0 * a * (s[i + 1] - s[i]))
             out[i] = x if x < v[i] else v[i]
         return out

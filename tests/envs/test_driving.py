@@ -8,11 +8,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from conesim.envs.runner import RunResult, run_scenario
 from conesim.envs.scenario import Scenario
-from conesim.tracks import Track, write_track
+from conesim.tracks import Track, load_track, write_track
+from conesim.tracks.generate import GeneratedTrack, Size, TrackSpec
 from conesim.tracks.generate.hard import hairpin_loop, hard_loop
 from conesim.tracks.survey import PathSurvey
 
@@ -54,3 +56,34 @@ def test_hard_loops_with_a_gate_wider_than_the_lane(seed: int, tmp_path: Path) -
     assert "gate 0.6 m" in track.description
     r = run_scenario(written(track, tmp_path), laps=1, seed=0)
     assert clean(r), (r.end_reason, r.events.cones_down_or_out)
+
+
+def gate_offset(track: Track) -> float:
+    """How far the big orange gate cones stand outside the lane's edges [m]."""
+    big = track.cones[[str(k) == "big_orange" for k in track.kinds]]
+    start = track.centreline[0]
+    half = 0.5 * float(track.widths[0])
+    return float(np.linalg.norm(big - start, axis=1).min()) - half
+
+
+@pytest.mark.parametrize(("seed", "size"), [(3, "small"), (4, "medium"), (5, "large")])
+def test_generated_tracks_with_a_gate_wider_than_the_lane(seed: int, size: Size) -> None:
+    """Generated tracks of each size (``tracks.generate``; the benchmark's seeds
+    are 5000 on), whose big orange gate cones stand 0.5-1.2 m outside the lane:
+    a clean lap from standstill."""
+    generated = GeneratedTrack(seed, TrackSpec(size=size))
+    assert gate_offset(load_track(generated)) > 0.4
+    r = run_scenario(Scenario(track=generated, laps=1, seed=0))
+    assert clean(r), (r.end_reason, r.events.cones_down_or_out)
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_generated_hairpins_of_3_m_lane_centre_radius(seed: int) -> None:
+    """Two hairpins of 3.0 m lane-centre radius, tighter than the generator's
+    4.5 m (a 9 m diameter at the lane's centre), in a 3.5 m lane: a clean lap.
+    In a 3.0 m lane the same hairpin leaves the car's front corner (4.35 m at
+    full lock) 4 cm from the outer cones' inner edge, and it touches them."""
+    spec = TrackSpec(size="small", width=(3.5, 3.5), hairpin_radius=(3.0, 3.0), hairpins=(2, 2))
+    r = run_scenario(Scenario(track=GeneratedTrack(seed, spec), laps=1, seed=0))
+    assert clean(r), (r.end_reason, r.events.cones_down_or_out)
+    assert r.cones_hit == 0

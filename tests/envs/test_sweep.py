@@ -150,6 +150,52 @@ def test_a_killed_worker_loses_nothing(tmp_path: Path, serial_quick: dict[str, A
     assert comparable(tmp_path / "pool") == serial_quick
 
 
+def ray_actor_pids() -> list[int]:
+    """The pids of this process's local Ray's run actors (``ray::RunActor``: the raylet this
+    process started is their parent, so another test's Ray is left alone)."""
+
+    def parent(pid: int) -> int:
+        try:
+            return int(Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1])
+        except (OSError, ValueError, IndexError):
+            return 0
+
+    pids = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            command = (entry / "cmdline").read_bytes()
+        except OSError:
+            continue
+        pid = int(entry.name)
+        if command.startswith(b"ray::RunActor") and parent(parent(pid)) == os.getpid():
+            pids.append(pid)
+    return pids
+
+
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="finds the actors' processes in /proc")
+def test_a_killed_ray_actor_loses_nothing(tmp_path: Path, serial_quick: dict[str, Any]) -> None:
+    """A real local Ray's run actors killed mid-sweep: the runs they held run again on new
+    actors, every row once, the same as the serial sweep."""
+    pytest.importorskip("ray")
+    killed: list[int] = []
+
+    def kill_the_actors(row: dict[str, Any]) -> None:
+        if not killed:
+            killed.extend(ray_actor_pids())
+            for pid in killed:
+                os.kill(pid, signal.SIGKILL)
+
+    report = run_sweep(
+        load_sweep(sweep_file(tmp_path, QUICK)), tmp_path / "ray", workers=2, ray=LOCAL_RAY,
+        pictures="none", on_row=kill_the_actors,
+    )  # fmt: skip
+    assert len(killed) == 2
+    assert (report.ran, report.errors) == (4, 0)
+    assert comparable(tmp_path / "ray") == serial_quick
+
+
 def wait_for_rows(out: Path, count: int, proc: subprocess.Popen[bytes]) -> None:
     """Until ``out`` has ``count`` rows (a generous bound that only stops a hang)."""
     deadline = time.monotonic() + 300.0

@@ -58,15 +58,15 @@ def test_midline_groups_carry_the_config_s_values() -> None:
 
 
 def test_speed_profile_groups_carry_the_config_s_values() -> None:
-    """The curvature floor a_lat_max / v_max^2 = 14 / 625 = 0.0224 1/m; the passes
+    """The curvature floor a_lat_max / v_max^2 = 12 / 625 = 0.0192 1/m; the passes
     brake unless asked not to."""
     config = SpeedProfileConfig()
     limits = config.limit_settings
     assert isinstance(limits, settings.LimitSettings)
-    assert limits.curvature_floor == pytest.approx(0.0224, rel=1e-12)
+    assert limits.curvature_floor == pytest.approx(0.0192, rel=1e-12)
     assert (limits.curvature_window, limits.v_max, limits.lateral_jerk_max) == (2.0, 25.0, 60.0)
     passes = config.pass_settings
     assert passes == settings.PassSettings(
-        True, 3.0, 8.0, 14.0, 0.0143, horizon_stop=True, brake=True
+        True, 3.0, 8.0, 12.0, 0.0143, horizon_stop=True, brake=True
     )
     assert type(passes.friction_ellipse) is bool

@@ -81,7 +81,7 @@ def steering_limit(
 ) -> FloatArray | None:
     """Step 2c: steering_rate_max (1 + (L kappa)^2) / (L |dkappa/ds| |kappa| R_lock)
     [m/s] (n,): delta = atan(L kappa) changes at v L kappa' / (1 + (L kappa)^2),
-    weighed by how near full lock the path turns."""
+    weighed by how near full lock the path turns, at least steering_weight_min."""
     n = len(kappa)
     half = round(config.jerk_window / (2.0 * spacing)) if spacing > 0.0 else 0
     if not config.steering_rate_max < math.inf or half < 1 or n < 2 * half + 1:
@@ -89,7 +89,11 @@ def steering_limit(
     slope = _slope(kappa, spacing, half)
     x = config.wheelbase * kappa
     lock = config.lock_radius
-    q = np.abs(kappa) * lock if lock > 0.0 else np.ones_like(kappa)
+    q = (
+        np.maximum(np.abs(kappa) * lock, config.steering_weight_min)
+        if lock > 0.0
+        else np.ones_like(kappa)
+    )
     with np.errstate(divide="ignore", invalid="ignore"):
         lim = config.steering_rate_max * (1.0 + x * x) / (config.wheelbase * slope * q)
     return np.where((slope > 0.0) & (q > 0.0), lim, np.inf)
@@ -225,7 +229,9 @@ def ref_speed_profile(
         v[-1] = 0.0 if v_end is None else min(v[-1], max(v_end, 0.0))
     if config.friction_ellipse:
         c = config
+        share = c.brake_lateral_share
         return ellipse_backward_pass(
-            s, v, kappa, c.a_brake, a_lat_max=c.a_lat_max, a_lat_aero=c.a_lat_aero
-        )
+            s, v, kappa, c.a_brake, a_lat_max=c.a_lat_max * share,
+            a_lat_aero=c.a_lat_aero * share,
+        )  # fmt: skip
     return backward_pass(s, v, config.a_brake)

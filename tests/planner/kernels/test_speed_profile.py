@@ -34,7 +34,8 @@ def assert_bits_equal(got: np.ndarray, expected: np.ndarray) -> None:
 # (off, default, tight; a jerk window of 1.25 m on 0.25 m steps rounds a tie,
 # 2.5 -> 2, 0.25 m gives no window), downforce (none, default, more than
 # some paths' curvature), curvature window (off, default, 1.0 m = 4 steps of
-# 0.25 m exactly: int() of an integer), horizon stop.
+# 0.25 m exactly: int() of an integer), horizon stop; and the steering-rate
+# limit's weight floor below its default 1, and the brake ellipse's lateral share.
 PROFILE_CONFIGS = [
     SpeedProfileConfig(
         friction_ellipse=ellipse,
@@ -49,7 +50,8 @@ PROFILE_CONFIGS = [
     for aero in (0.0, 0.0143, 0.5)
     for window in (0.0, 2.0, 1.0)
     for stop in (True, False)
-]
+] + [SpeedProfileConfig(steering_weight_min=w) for w in (0.0, 0.4)]
+PROFILE_CONFIGS += [SpeedProfileConfig(brake_lateral_share=q) for q in (0.5, 0.8)]
 
 
 def profile_cases(rng: np.random.Generator, trials: int) -> list[np.ndarray]:
@@ -258,8 +260,11 @@ def test_reference_curvature_limit_near_full_lock() -> None:
     v = ref.curvature_limit(np.array([0.25, -1.0 / 3.0]), cfg)
     assert_allclose(v, [math.sqrt(14.0 * (1.0 - 0.75**4) * 4.0), math.sqrt(6.3)], rtol=1e-12)
     p = np.column_stack([4.0 * np.cos(np.linspace(0, 2, 40)), 4.0 * np.sin(np.linspace(0, 2, 40))])
-    compiled = speed_profile(p, SpeedProfileConfig(a_lat_aero=0.0, curvature_window=0.0,
-                             lateral_jerk_max=math.inf, horizon_stop=False))  # fmt: skip
+    cfg = SpeedProfileConfig(
+        a_lat_max=14.0, a_lat_aero=0.0, curvature_window=0.0, lateral_jerk_max=math.inf,
+        horizon_stop=False,
+    )  # fmt: skip
+    compiled = speed_profile(p, cfg)
     assert_allclose(compiled[5:-5], 6.187, atol=2e-3)
 
 
