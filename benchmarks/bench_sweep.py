@@ -12,8 +12,10 @@ Printed per executor:
 
 * end to end [runs/s]: the runs over the call's wall time. The pool's
   includes starting its workers (spawn, import, loading the kernels); the
-  serial sweep runs in this process, already warm; Ray's excludes starting
-  the local Ray (``ray.init``, printed apart), as with ``--ray ADDRESS``.
+  serial sweep runs in this process, already warm; Ray's includes starting
+  its actors (one per CPU, warmed as the pool's workers are) but not the
+  local Ray itself (``ray_session``, as ``conesim sweep --ray`` starts it;
+  printed apart), as with ``--ray ADDRESS``.
 * steady [runs/s]: after the first run of each worker (the start-up), the
   runs finished over the time they took;
 * 1st row [s]: from the call to the first run written (the pool's worker
@@ -48,6 +50,7 @@ from write_results import pymunk_reference
 from conesim.envs.runner import run_scenario
 from conesim.envs.sweep import LOCAL_RAY, run_sweep
 from conesim.envs.sweep_file import load_sweep
+from conesim.envs.sweep_workers import ray_session
 
 SWEEP = """\
 conesim_sweep: 1
@@ -87,7 +90,6 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--seeds", type=int, default=12, help="seeds per track (runs: 2 x this)")
     args = parser.parse_args()
-    import ray
 
     before, load0 = pymunk_reference(), os.getloadavg()[0]
     run_scenario("skidpad", localization="fused")  # this process warm, as the CLI's would be
@@ -101,14 +103,11 @@ def main() -> None:
             figures["serial"].append(timed_sweep(path, out / "serial", workers=1))
             figures["pool"].append(timed_sweep(path, out / "pool", workers=WORKERS))
             t0 = time.perf_counter()
-            ray.init(num_cpus=WORKERS, include_dashboard=False, log_to_driver=False)
-            ray_start.append(time.perf_counter() - t0)
-            try:
+            with ray_session(WORKERS, None):  # as the CLI starts it
+                ray_start.append(time.perf_counter() - t0)
                 figures["ray"].append(
                     timed_sweep(path, out / "ray", workers=WORKERS, ray=LOCAL_RAY)
                 )
-            finally:
-                ray.shutdown()
     after, load1 = pymunk_reference(), os.getloadavg()[0]
     med = {k: {f: statistics.median(r[f] for r in v) for f in v[0]} for k, v in figures.items()}
     print(
@@ -131,7 +130,13 @@ def main() -> None:
     print(f"  local Ray start (ray.init, not in the figures): {statistics.median(ray_start):.1f} s")
     for a, b, target in (("pool", "serial", ">= 1.8x"), ("ray", "pool", ">= 0.85x")):
         e2e, steady = med[a]["e2e"] / med[b]["e2e"], med[a]["steady"] / med[b]["steady"]
-        print(f"  {a} / {b}: {e2e:.2f}x end to end, {steady:.2f}x steady (target {target})")
+        paired = statistics.median(
+            x["e2e"] / y["e2e"] for x, y in zip(figures[a], figures[b], strict=True)
+        )
+        print(
+            f"  {a} / {b}: {e2e:.2f}x end to end, {steady:.2f}x steady; "
+            f"{paired:.2f}x end to end within a repeat, median (target {target})"
+        )
     print(
         "  ('a run': a run's own setup + loop time in its worker, above serial's where the "
         "workers shared cores;\n   'in flight': steady x a run, the runs kept going at once: "

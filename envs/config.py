@@ -35,6 +35,7 @@ from conesim.sim.sensors import PROFILES as SENSOR_PROFILES
 from conesim.sim.sensors import Faults, SensorProfile, get_profile
 from conesim.sim.vehicle_params import VehicleParams
 from conesim.tracks import DEFAULT_TRACK, GeneratedTrack, TrackSpec
+from conesim.tracks.survey import ConeSurvey
 
 OBSERVATION_MODES = ("vector", "dict")
 RANDOM_TRACK = "random"
@@ -119,6 +120,8 @@ class EnvConfig:
             (``auto``: matched to the sensors, ``envs.ekf_tuning``).
         ekf_tuning: as ``Scenario.ekf_tuning``.
         vehicle: the car.
+        cone_map: the cone map's survey error (``cones`` localization), as
+            ``Scenario.cone_map``.
         autopilot: the settings ``AutopilotExpert`` drives with by default
             (None: the localization's default); the env itself has no driver.
     """
@@ -146,6 +149,7 @@ class EnvConfig:
     ekf: EkfConfig | None = None
     ekf_tuning: EkfTuning = "auto"
     vehicle: VehicleParams = dataclasses.field(default_factory=VehicleParams)
+    cone_map: ConeSurvey = dataclasses.field(default_factory=ConeSurvey)
     autopilot: AutopilotConfig | None = None
 
     def __post_init__(self) -> None:
@@ -155,6 +159,7 @@ class EnvConfig:
         parts = (
             ("faults", Faults),
             ("vehicle", VehicleParams),
+            ("cone_map", ConeSurvey),
             ("ekf", EkfConfig),
             ("track_spec", TrackSpec),
         )
@@ -295,6 +300,7 @@ SCENARIO_FIELDS = {
     "ekf_tuning": "ekf_tuning",
     "autopilot": "autopilot",
     "vehicle": "vehicle",
+    "cone_map": "cone_map",
 }
 """``EnvConfig`` key -> the ``Scenario`` field it is (all but the scenario's seed)."""
 

@@ -16,13 +16,16 @@ made here, in ``envs``, where both meet:
   tuning (a test holds them equal).
 
 Faults are applied after the match (``envs.scenario``): the filter is told
-what the sensors are, not what goes wrong with them.
+what the sensors are, not what goes wrong with them. The cone update
+(``cones`` mode) is matched the same way to the cone detector
+(``matched_cone_update``).
 """
 
 from __future__ import annotations
 
 import dataclasses
 
+from conesim.localization.cones import ConeUpdateConfig
 from conesim.localization.ekf import PROFILES as EKF_PROFILES
 from conesim.localization.ekf import EkfConfig, for_profile
 from conesim.sim.sensors import DEFAULT_PROFILE, SensorProfile
@@ -52,4 +55,21 @@ def matched_ekf(profile: SensorProfile, tuning: str | None = None) -> EkfConfig:
         gps_bias_tau=gps.bias_tau,
         heading_bias_sigma=heading.bias_sigma,
         heading_bias_tau=heading.bias_tau,
+    )
+
+
+def matched_cone_update(profile: SensorProfile) -> ConeUpdateConfig:
+    """The cone update's settings for ``profile``'s cone detector (``cones`` mode).
+
+    The detector's range and bearing noise and its field of view, as the team
+    knows them (before any fault); the gates and the map's assumed error are
+    ``ConeUpdateConfig``'s defaults.
+    """
+    cones = profile.cones
+    return ConeUpdateConfig(
+        range_sigma=cones.range_sigma,
+        bearing_sigma=cones.bearing_sigma,
+        min_range=cones.min_range,
+        max_range=cones.max_range,
+        fov=cones.fov,
     )

@@ -37,7 +37,8 @@ from numpy.typing import NDArray
 
 from conesim.core.messages import Message
 from conesim.core.pose import Pose2D
-from conesim.envs.ekf_tuning import matched_ekf
+from conesim.envs.ekf_tuning import matched_cone_update, matched_ekf
+from conesim.localization.cones import ConeUpdate, ConeUpdateConfig, LandmarkMap
 from conesim.localization.ekf import EkfConfig
 from conesim.localization.frames import Buffer, TransformStamped
 from conesim.localization.localizer import Localizer
@@ -49,7 +50,7 @@ from conesim.sim.vehicle import VehicleState
 from conesim.sim.world import World, WorldConfig
 from conesim.tracks import Track
 from conesim.tracks.global_path import GlobalPath, global_path_for_track
-from conesim.tracks.survey import PathSurvey, surveyed
+from conesim.tracks.survey import ConeSurvey, PathSurvey, surveyed, surveyed_cones
 
 FloatArray = NDArray[np.float64]
 _TIME_EPS = 1e-9  # [s] tolerance of the time limit
@@ -261,11 +262,16 @@ class ClosedLoop:
             tuning, else rtk's, with its receiver's error model).
         survey: how far the global path the driver gets is off the track's
             (``tracks.survey``); default exact.
+        cone_map: how far the cone map (``cones`` localization) is off the
+            cones as they stand (``tracks.survey.ConeSurvey``); default a few cm.
+        cones: the cone update's settings (``cones`` localization); default
+            matched to the world's cone detector (``envs.ekf_tuning``).
 
     Attributes:
         track, world_config, rules, control_rate, substeps: as given or derived.
         global_path: the track's global path (a track asset) in ``reference``,
             as surveyed.
+        cone_update: the cone map and its update (``cones`` localization), else None.
         world: the simulated world of the current episode.
         localizer: localization of the current episode; its ``frames`` is the frame tree.
         driver: the current episode's driver, or None.
@@ -283,6 +289,8 @@ class ClosedLoop:
         driver: DriverFactory | None = None,
         ekf: EkfConfig | None = None,
         survey: PathSurvey | None = None,
+        cone_map: ConeSurvey | None = None,
+        cones: ConeUpdateConfig | None = None,
     ) -> None:
         self.track = track
         self.rules = rules or EpisodeRules()
@@ -304,6 +312,13 @@ class ClosedLoop:
         self.global_path = surveyed(
             global_path_for_track(track, self.world_config.origin), survey or PathSurvey()
         )
+        self.cone_update: ConeUpdate | None = None
+        if localization == "cones":
+            landmarks = LandmarkMap(
+                surveyed_cones(track.cones, cone_map or ConeSurvey()), track.kinds
+            )
+            config = cones or matched_cone_update(self.world_config.sensor_profile)
+            self.cone_update = ConeUpdate(landmarks, config)
         self._driver_factory = driver
         self.driver: Driver | None = None
         self.record: StepRecord | None = None
@@ -331,7 +346,9 @@ class ClosedLoop:
             driver's first command.
         """
         self.world = world = World(self.track, self.world_config, seed, start_pose)
-        self.localizer = Localizer(self.localization, self.ekf_config, self.world_config.origin)
+        self.localizer = Localizer(
+            self.localization, self.ekf_config, self.world_config.origin, cones=self.cone_update
+        )
         first = world.initial_messages
         sent = self.localizer.step(0.0, first, world.antenna_pose)
         factory = self._driver_factory

@@ -85,6 +85,7 @@ class RunResult:
     centreline_lap_time_s: float
     lap_time_ratio: float | None
     events: RunEvents = field(default_factory=RunEvents)
+    cone_associations: dict[str, float] | None = None
     trace: RunTrace = field(repr=False, default_factory=RunTrace)
     scenario: dict[str, Any] = field(repr=False, default_factory=dict)
     racing_line: FloatArray | None = field(repr=False, default=None)
@@ -297,6 +298,15 @@ def _result(
         centreline_lap_time_s=limit.centreline_s,
         lap_time_ratio=None if best is None else best / limit.limit_s,
         events=metrics.events,
+        cone_associations=_cone_associations(loop),
         trace=metrics.trace,
         racing_line=limit.racing_line,
     )
+
+
+def _cone_associations(loop: ClosedLoop) -> dict[str, float] | None:
+    """The filter's cone association counts (``cones`` localization), else None."""
+    ekf = loop.localizer.ekf
+    if loop.cone_update is None or ekf is None:
+        return None
+    return ekf.health.cones.as_dict()

@@ -35,7 +35,7 @@ import os
 from dataclasses import dataclass, field
 from typing import Literal, get_args
 
-from conesim.envs.ekf_tuning import matched_ekf, tuning_name
+from conesim.envs.ekf_tuning import matched_cone_update, matched_ekf, tuning_name
 from conesim.envs.loop import ClosedLoop, DriverFactory, EpisodeRules
 from conesim.localization.ekf import EkfConfig, for_profile
 from conesim.localization.modes import LOCALIZATION_MODES
@@ -45,9 +45,9 @@ from conesim.sim.sensors import DEFAULT_PROFILE, Faults, SensorProfile, apply_fa
 from conesim.sim.vehicle_params import VehicleParams
 from conesim.sim.world import WorldConfig
 from conesim.tracks import DEFAULT_TRACK, GeneratedTrack, Track, track_label
-from conesim.tracks.survey import PathSurvey
+from conesim.tracks.survey import ConeSurvey, PathSurvey
 
-Localization = Literal["fused", "raw", "truth"]
+Localization = Literal["fused", "raw", "truth", "cones"]
 """The localization modes (``localization.modes``)."""
 EkfTuning = Literal["auto", "ideal", "rtk", "consumer", "consumer_white", "custom"]
 """``auto`` (matched to the sensors), a shipped tuning, or ``custom`` (EkfConfig's defaults)."""
@@ -71,7 +71,8 @@ class Scenario:
         end_on_stuck: the run ends when race control finds the car stuck.
         control_rate: the loop's clock: the autopilot's (or action's) rate [Hz].
         physics_rate: physics steps per second [Hz], a multiple of control_rate.
-        localization: ``fused`` (EKF), ``raw`` (the ROS pipeline's) or ``truth``.
+        localization: ``fused`` (EKF), ``raw`` (the ROS pipeline's), ``truth``,
+            or ``cones`` (the EKF with the cone scans against the cone map).
         sensors: the sensors, as the team knows them (before the faults).
         faults: what goes wrong with them.
         ekf: the filter's settings; None: the tuning ``ekf_tuning`` names.
@@ -81,6 +82,8 @@ class Scenario:
         vehicle: the car.
         global_path: how far the global path given to the car is off the
             track's (``tracks.survey.PathSurvey``: per-point noise, a bias).
+        cone_map: how far the cone map of ``cones`` localization is off the
+            cones (``tracks.survey.ConeSurvey``: per-cone noise, a bias).
     """
 
     track: str | GeneratedTrack = DEFAULT_TRACK
@@ -99,6 +102,7 @@ class Scenario:
     autopilot: AutopilotConfig | None = None
     vehicle: VehicleParams = field(default_factory=VehicleParams)
     global_path: PathSurvey = field(default_factory=PathSurvey)
+    cone_map: ConeSurvey = field(default_factory=ConeSurvey)
 
     def __post_init__(self) -> None:
         track = self.track
@@ -153,6 +157,7 @@ class Scenario:
             ("autopilot", (AutopilotConfig, type(None))),
             ("vehicle", VehicleParams),
             ("global_path", PathSurvey),
+            ("cone_map", ConeSurvey),
         )
         for name, kind in parts:
             value = getattr(self, name)
@@ -233,4 +238,6 @@ class Scenario:
             driver=driver,
             ekf=self.ekf_config(),
             survey=self.global_path,
+            cone_map=self.cone_map,
+            cones=matched_cone_update(self.sensors),
         )

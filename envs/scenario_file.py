@@ -12,7 +12,7 @@ The format (version 1; every key optional, the defaults are ``conesim run``'s)::
     end_on_stuck: true
     control_rate: 50.0         # [Hz]
     physics_rate: 200.0        # [Hz], a multiple of control_rate
-    localization: fused        # fused | raw | truth
+    localization: fused        # fused | raw | truth | cones
     sensors:                   # or just a profile's name: "sensors: consumer"
       profile: rtk             # the shipped profile the fields below change
       cones: {max_range: 20.0} # any field of GpsConfig, HeadingConfig, ... by section
@@ -27,6 +27,7 @@ The format (version 1; every key optional, the defaults are ``conesim run``'s)::
       classifier: {mode: colour}
     vehicle: {mass: 200.0}     # any VehicleParams field
     global_path: {noise: 0.2, bias: 0.3, seed: 1}   # the surveyed path's error [m]
+    cone_map: {noise: 0.03, bias: 0.02, seed: 0}    # the cone map's error (cones mode) [m]
 
 Overrides (``--set sensors.cones.max_range=20``, or ``load_scenario(path,
 {"laps": 3})``) change the file's mapping before it is checked, so an
@@ -62,7 +63,7 @@ from conesim.planner.autopilot import default_config
 from conesim.sim.sensors import DEFAULT_PROFILE, PROFILES, Faults, SensorProfile, get_profile
 from conesim.sim.vehicle_params import VehicleParams
 from conesim.tracks import GeneratedTrack, TrackSpec, shipped_tracks
-from conesim.tracks.survey import PathSurvey
+from conesim.tracks.survey import ConeSurvey, PathSurvey
 
 FORMAT_KEY = "conesim_scenario"
 FORMAT_VERSION = 1
@@ -71,7 +72,7 @@ SCALARS = (
     "control_rate", "physics_rate", "localization",
 )  # fmt: skip
 """The top-level keys that are plain values, in the order ``show`` writes them."""
-GROUPS = ("sensors", "faults", "ekf", "autopilot", "vehicle", "global_path")
+GROUPS = ("sensors", "faults", "ekf", "autopilot", "vehicle", "global_path", "cone_map")
 TOP_KEYS = (FORMAT_KEY, *SCALARS, *GROUPS)
 SHORTHAND = {"sensors": "profile", "ekf": "tuning", "autopilot": "preset"}
 """A group given as a plain name means this key of it (``sensors: consumer``)."""
@@ -214,6 +215,8 @@ def _scenario(data: dict[str, Any]) -> Scenario:
         values["vehicle"] = build(VehicleParams, data["vehicle"], path=("vehicle",))
     if data.get("global_path") is not None:
         values["global_path"] = build(PathSurvey, data["global_path"], path=("global_path",))
+    if data.get("cone_map") is not None:
+        values["cone_map"] = build(ConeSurvey, data["cone_map"], path=("cone_map",))
     try:
         return Scenario(**values)
     except ValueError as exc:
@@ -403,6 +406,7 @@ def scenario_to_mapping(scenario: Scenario) -> dict[str, Any]:
     out["autopilot"] = {"preset": preset, **plain(full.autopilot, HIDDEN)}
     out["vehicle"] = plain(full.vehicle)
     out["global_path"] = plain(full.global_path)
+    out["cone_map"] = plain(full.cone_map)
     return out
 
 

@@ -62,7 +62,8 @@ def run_sweep(
         sweep: the runs.
         out: the output directory (new, empty, or this sweep's).
         workers: processes (None: every core); 1 runs in this process.
-            With ``ray``: the local Ray's CPUs, or the tasks in flight.
+            With ``ray``: the local Ray's CPUs, one actor each (on a cluster: one
+            actor per CPU of the cluster).
         ray: None (local processes), ``LOCAL_RAY`` (a local Ray), or a
             Ray cluster's address.
         pictures: which runs get a ``run.png``: ``all``, ``failed`` (not

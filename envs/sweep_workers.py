@@ -17,10 +17,16 @@ executor gives the same results.
   runs it may have held are known: they are run again in a new pool, and a
   run in flight at ``MAX_ATTEMPTS`` deaths is recorded as an error
   (``WorkerDied``). Workers ignore SIGINT; the sweep's process ends them.
-* ``ray``: Ray tasks (``pip install "conesim[ray]"``) on a local Ray it
-  starts with ``workers`` CPUs, or on the cluster at ``address`` (whose
-  nodes must have conesim installed). A task whose worker dies is retried
-  once by Ray, then recorded as an error.
+* ``ray``: Ray actors (``pip install "conesim[ray]"``), one per CPU of a
+  local Ray it starts with ``workers`` CPUs, or of the cluster at
+  ``address`` (whose nodes must have conesim installed). Each actor is
+  warmed once when it starts, as a pool worker is (the kernels loaded), and
+  reused for every run it is given, one at a time, so when an actor dies
+  the run it held is known: it is run again on a new actor, and a run in
+  flight at ``MAX_ATTEMPTS`` deaths is recorded as an error
+  (``WorkerDied``), as in the pool. (Ray tasks instead landed on workers
+  that had not loaded the kernels, and Ray's own retry hid which run a
+  death cost.) The actors are ended when the sweep ends or is interrupted.
 """
 
 from __future__ import annotations
@@ -209,36 +215,72 @@ def ray_session(workers: int, address: str | None) -> Iterator[Any]:
 def ray_tasks(
     points: Sequence[SweepPoint], workers: int, address: str | None, pictures: Pictures = "all"
 ) -> Results:
-    """The runs as Ray tasks (see the module docstring)."""
+    """The runs on Ray actors, one per CPU (see the module docstring)."""
     with ray_session(workers, address) as ray:
         yield from _ray_loop(ray, points, workers, address, pictures)
+
+
+class RunActor:
+    """A Ray actor that runs sweep runs: warmed once when it starts (the planner's
+    kernels loaded, as a pool worker is), then given one run at a time."""
+
+    def __init__(self) -> None:
+        from conesim.planner.autopilot import warm_up_planner  # noqa: PLC0415 (in the actor)
+
+        warm_up_planner()
+
+    def run(self, scenario: Scenario, pictures: Pictures) -> Outcome:
+        """One run (``run_point``)."""
+        return run_point(scenario, pictures)
 
 
 def _ray_loop(
     ray: Any, points: Sequence[SweepPoint], workers: int, address: str | None, pictures: Pictures
 ) -> Results:
-    task = ray.remote(num_cpus=1, max_retries=MAX_ATTEMPTS - 1)(run_point)
+    actor_class = ray.remote(num_cpus=1, max_restarts=0, max_task_retries=0)(RunActor)
     slots = workers if address is None else max(1, int(ray.cluster_resources().get("CPU", 1)))
+    slots = min(slots, len(points))
     queue = deque(points)
-    running: dict[Any, SweepPoint] = {}
+    deaths: dict[str, int] = {}
+    idle: list[Any] = [actor_class.remote() for _ in range(slots)]
+    running: dict[Any, tuple[SweepPoint, Any]] = {}
     try:
         while queue or running:
-            while queue and len(running) < slots:
-                point = queue.popleft()
-                running[task.remote(point.scenario, pictures)] = point
+            while queue and idle:
+                point, actor = queue.popleft(), idle.pop()
+                running[actor.run.remote(point.scenario, pictures)] = (point, actor)
             done, _ = ray.wait(list(running), num_returns=1)
             for ref in done:
-                point = running.pop(ref)
+                point, actor = running.pop(ref)
                 try:
                     outcome = ray.get(ref)
-                except ray.exceptions.RayError as exc:  # the worker died (twice)
-                    text = f"{type(exc).__name__}: {exc}"
-                    outcome = Outcome(error=RunError("WorkerDied", text.splitlines()[0], text))
+                except ray.exceptions.RayActorError as exc:  # the actor's process died
+                    ray.kill(actor, no_restart=True)
+                    idle.append(actor_class.remote())
+                    deaths[point.run_id] = deaths.get(point.run_id, 0) + 1
+                    if deaths[point.run_id] < MAX_ATTEMPTS:
+                        logging.getLogger(__name__).error("a Ray actor died; starting a new one")
+                        queue.appendleft(point)
+                        continue
+                    outcome = _ray_error(exc, deaths[point.run_id])
+                except ray.exceptions.RayError as exc:  # the run's arguments or result, say
+                    idle.append(actor)
+                    outcome = _ray_error(exc, None)
+                else:
+                    idle.append(actor)
                 yield point, outcome
-    except BaseException:
-        for ref in running:
-            ray.cancel(ref, force=True)
-        raise
+    finally:
+        for actor in idle + [actor for _, actor in running.values()]:
+            ray.kill(actor, no_restart=True)
+
+
+def _ray_error(exc: Exception, deaths: int | None) -> Outcome:
+    text = f"{type(exc).__name__}: {exc}"
+    first = text.splitlines()[0]
+    if deaths is None:
+        return Outcome(error=RunError(type(exc).__name__, first, text))
+    message = f"the Ray actor running it died ({deaths} times): {first}"
+    return Outcome(error=RunError("WorkerDied", message, text))
 
 
 def default_workers() -> int:

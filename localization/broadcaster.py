@@ -17,6 +17,8 @@ Modes (:class:`LocalizationMode`):
   is dropped with a logged warning instead of being broadcast.
 * ``fused`` (the default): the fusion EKF's estimate at the broadcast time
   (predicted from its newest input), at z = 0; nothing before it initialises.
+* ``cones``: the same, from the filter that also fuses the cone scans
+  against the map (``localization.cones``).
 * ``truth``: a pose the caller passes at each step (ground truth, for
   debugging and RL baselines; only ``sim``/``envs`` have it).
 
@@ -99,8 +101,10 @@ class VehicleTfBroadcaster:
     ) -> None:
         self.buffer = buffer
         self.config = config or BroadcasterConfig()
-        if self.config.mode == LocalizationMode.FUSED and ekf is None:
-            raise ValueError("broadcast mode 'fused' needs the FusionEkf (ekf=...)")
+        if self.config.mode.uses_ekf and ekf is None:
+            raise ValueError(
+                f"broadcast mode {self.config.mode.value!r} needs the FusionEkf (ekf=...)"
+            )
         self.ekf = ekf
         self.published = 0
         self._next_time: float | None = None

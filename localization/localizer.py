@@ -1,10 +1,12 @@
 """The car's localization: measurements in, the frame tree out (spec 000).
 
 One :class:`Localizer` per car wires the ROS pipeline's localization nodes into one
-frame tree, in one of three modes (``LOCALIZATION_MODES``):
+frame tree, in one of four modes (``LOCALIZATION_MODES``):
 
 - ``fused`` (default): every measurement goes into the fusion EKF
   (``localization.ekf``); the broadcaster publishes its estimate.
+- ``cones``: as ``fused``, and each cone scan is matched to a known cone map
+  and updates the filter's pose (``localization.cones``).
 - ``raw``: the ROS pipeline as written: ``/ublox_gps_node/fix`` ->
   ``gps_to_local_cartesian`` -> ``/local_xy``, and ``/global_yaw``, cached
   by the broadcaster.
@@ -32,6 +34,7 @@ from conesim.core.messages import (
 )
 from conesim.core.pose import Pose2D
 from conesim.localization.broadcaster import BroadcasterConfig, VehicleTfBroadcaster
+from conesim.localization.cones import ConeUpdate
 from conesim.localization.ekf import EkfConfig, Estimate, FusionEkf
 from conesim.localization.frames import LATEST, Buffer, TransformError, TransformStamped
 from conesim.localization.gps_to_local import GpsToLocalCartesian
@@ -55,15 +58,19 @@ class Localizer:
     """GPS-to-local, the fusion EKF and the TF broadcaster around one frame tree.
 
     Args:
-        mode: ``fused``, ``raw`` or ``truth``.
-        ekf: the filter's settings (``fused`` mode; see ``ekf.for_profile``).
+        mode: ``fused``, ``raw``, ``truth`` or ``cones``.
+        ekf: the filter's settings (``fused`` and ``cones``; see ``ekf.for_profile``).
         origin: the geodetic origin of ``reference``.
         broadcaster: the broadcaster's rate and frame names (its mode is ``mode``).
+        cones: the cone map and its update (required in ``cones`` mode, else unused).
 
     Attributes:
         frames: the frame tree (tf2's buffer) the car's software reads.
-        ekf: the fusion filter in ``fused`` mode, else None.
+        ekf: the fusion filter in ``fused`` and ``cones`` modes, else None.
         broadcaster: the vehicle TF broadcaster.
+
+    Raises:
+        ValueError: an unknown mode, or ``cones`` without a map.
     """
 
     def __init__(
@@ -72,6 +79,7 @@ class Localizer:
         ekf: EkfConfig | None = None,
         origin: ReferenceOrigin = DEFAULT_ORIGIN,
         broadcaster: BroadcasterConfig | None = None,
+        cones: ConeUpdate | None = None,
     ) -> None:
         if mode not in LOCALIZATION_MODES:
             raise ValueError(
@@ -79,7 +87,13 @@ class Localizer:
             )
         self.mode = LocalizationMode(mode)
         self.frames = Buffer()
-        self.ekf = FusionEkf(ekf) if self.mode is LocalizationMode.FUSED else None
+        if self.mode is LocalizationMode.CONES and cones is None:
+            raise ValueError("localization mode 'cones' needs the cone map (cones=ConeUpdate(...))")
+        self.ekf: FusionEkf | None = None
+        if self.mode is LocalizationMode.FUSED:
+            self.ekf = FusionEkf(ekf)
+        elif self.mode is LocalizationMode.CONES:
+            self.ekf = FusionEkf(ekf, cones)
         self._gps_to_local = GpsToLocalCartesian(origin)
         config = dataclasses.replace(broadcaster or BroadcasterConfig(), mode=self.mode)
         self.broadcaster = VehicleTfBroadcaster(self.frames, config, ekf=self.ekf)
@@ -121,7 +135,7 @@ class Localizer:
             return None
 
     def estimate(self, t: float) -> Estimate | None:
-        """The filter's estimate at ``t`` [s] (``fused`` mode, once initialised), else None."""
+        """The filter's estimate at ``t`` [s] (``fused``, ``cones``; once initialised)."""
         if self.ekf is None or not self.ekf.initialised:
             return None
         return self.ekf.estimate(t)

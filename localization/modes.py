@@ -18,7 +18,14 @@ class LocalizationMode(StrEnum):
     """The ROS pipeline as written: the last ``/local_xy`` and ``/global_yaw``."""
     TRUTH = "truth"
     """The true pose (a baseline and a debugging aid)."""
+    CONES = "cones"
+    """The fusion EKF with each cone scan matched to a known cone map (``localization.cones``)."""
+
+    @property
+    def uses_ekf(self) -> bool:
+        """Whether the broadcaster publishes the fusion EKF's estimate."""
+        return self in (LocalizationMode.FUSED, LocalizationMode.CONES)
 
 
 LOCALIZATION_MODES = tuple(mode.value for mode in LocalizationMode)
-"""The modes' names: ``fused``, ``raw``, ``truth``."""
+"""The modes' names: ``fused``, ``raw``, ``truth``, ``cones``."""

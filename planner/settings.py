@@ -177,6 +177,8 @@ class PassSettings(NamedTuple):
         horizon_stop: the last waypoint's speed is 0 (or the given end speed).
         brake: the brake pass runs (False: the drive pass alone, for
             ``speed_profile.forward_pass``).
+        brake_lateral_share: the brake pass's ellipse takes this share of
+            the lateral limit as its whole [-] (1: the same ellipse).
     """
 
     friction_ellipse: bool
@@ -186,6 +188,7 @@ class PassSettings(NamedTuple):
     a_lat_aero: float
     horizon_stop: bool
     brake: bool
+    brake_lateral_share: float = 1.0
 
 
 class LaneSettings(NamedTuple):

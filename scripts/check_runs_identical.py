@@ -7,8 +7,9 @@ With ``--against REF`` it then compares every ``result.json`` with the one
 of the same name under ``REF``, apart from the fields that depend on the
 machine (wall time, real-time factor, setup time), and prints one line per
 run: ``same`` or the fields that differ. A field the reference does not
-have (one that ``result.json`` gained since, such as ``scenario``) is listed
-as new but is no difference: every field the reference has must be the same.
+have (one that ``result.json`` gained since, such as ``scenario``, or a key
+inside one, such as ``scenario.cone_map``) is listed as new but is no
+difference: every field the reference has must be the same, at every depth.
 
 The list: every shipped track x ``rtk``/``consumer`` sensors x
 ``fused``/``raw``/``truth`` localization x seeds 0 and 1, one lap each.
@@ -78,16 +79,27 @@ def run_one(out: Path, track: str, sensors: str, localization: str, seed: int) -
     return f"{name}: exit {done.returncode}"
 
 
-def differences(a: dict[str, Any], b: dict[str, Any]) -> list[str]:
+def differences(a: dict[str, Any], b: dict[str, Any], prefix: str = "") -> list[str]:
     """The keys of the reference ``a`` whose values differ in ``b`` (timing fields
-    left out), with both values. Keys new in ``b`` are not compared."""
-    keys = sorted(set(a) - set(TIMING_FIELDS))
-    return [f"{k}: {a.get(k)!r} -> {b.get(k)!r}" for k in keys if a.get(k) != b.get(k)]
+    left out), with both values, dotted at any depth. Keys new in ``b`` are not compared."""
+    keys = sorted(set(a) - set(TIMING_FIELDS)) if not prefix else sorted(a)
+    out: list[str] = []
+    for k in keys:
+        old, new = a.get(k), b.get(k)
+        if isinstance(old, dict) and isinstance(new, dict):
+            out += differences(old, new, f"{prefix}{k}.")
+        elif old != new:
+            out.append(f"{prefix}{k}: {old!r} -> {new!r}")
+    return out
 
 
-def new_keys(a: dict[str, Any], b: dict[str, Any]) -> list[str]:
-    """The keys of ``b`` that the reference ``a`` does not have."""
-    return sorted(set(b) - set(a))
+def new_keys(a: dict[str, Any], b: dict[str, Any], prefix: str = "") -> list[str]:
+    """The keys of ``b`` that the reference ``a`` does not have, dotted at any depth."""
+    out = [f"{prefix}{k}" for k in sorted(set(b) - set(a))]
+    for k in sorted(set(a) & set(b)):
+        if isinstance(a[k], dict) and isinstance(b[k], dict):
+            out += new_keys(a[k], b[k], f"{prefix}{k}.")
+    return out
 
 
 def compare(out: Path, ref: Path) -> int:

@@ -136,10 +136,10 @@ class EkfConfig:
             gps_bias=self.gps_bias_sigma > 0.0, heading_bias=self.heading_bias_sigma > 0.0
         )
 
-    def process_model(self) -> ProcessModel:
-        """The motion model's settings."""
+    def process_model(self, layout: StateLayout | None = None) -> ProcessModel:
+        """The motion model's settings (on ``layout``, default :attr:`layout`)."""
         return ProcessModel(
-            layout=self.layout,
+            layout=layout or self.layout,
             imu_period=1.0 / self.imu_rate,
             accel_model_density=self.accel_model_density,
             yaw_model_density=self.yaw_model_density,

@@ -66,16 +66,17 @@ formulation (``tests/localization/test_ekf_regression.py``):
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 from numpy.typing import NDArray
 from scipy.stats import chi2
 
-from conesim.core.messages import Message
+from conesim.core.messages import ConeDetections, Message
 from conesim.localization.ekf import kernels
 from conesim.localization.ekf import model as m
 from conesim.localization.ekf.config import EkfConfig
@@ -84,6 +85,9 @@ from conesim.localization.ekf.health import Health, RejectReason, Sensor, Update
 from conesim.localization.ekf.history import Entry, History, Snapshot, order_key
 from conesim.localization.ekf.measurements import InvalidMessage, Measurement, to_measurement
 from conesim.localization.ekf.observation import OBSERVATIONS
+
+if TYPE_CHECKING:
+    from conesim.localization.cones.update import ConeUpdate
 
 ESTIMATE_CACHE_SIZE = 8  # estimates kept (per stamp) for repeated calls
 
@@ -159,17 +163,22 @@ class FusionEkf:
 
     Args:
         config: noise model, gating, history; default :class:`EkfConfig`.
+        cones: the cone map and its update (``cones`` mode,
+            :mod:`localization.cones`): each ``ConeDetections`` scan then
+            updates the pose; None ignores the scans.
 
     Attributes:
         config: the settings.
         layout: the state layout.
     """
 
-    def __init__(self, config: EkfConfig | None = None) -> None:
+    def __init__(self, config: EkfConfig | None = None, cones: ConeUpdate | None = None) -> None:
         self.config = config or EkfConfig()
-        self.layout = self.config.layout
+        self._cones = cones
+        map_bias = cones is not None and cones.config.map_bias_sigma > 0.0
+        self.layout = dataclasses.replace(self.config.layout, map_bias=map_bias)
         self._health = Health()
-        self._process = self.config.process_model()
+        self._process = self.config.process_model(self.layout)
         self._step = m.MotionStep(self._process)
         kernels.warm_up(self._step, NO_IMU_INPUT, NO_IMU_COV)
         self._gates = {dof: float(chi2.ppf(self.config.gate_probability, dof)) for dof in (1, 2)}
@@ -219,8 +228,9 @@ class FusionEkf:
         """Hand over one message (any order of stamps within the history window).
 
         Args:
-            msg: an ``Imu``, ``NavSatFix``, ``HeadingStamped`` or ``WheelSpeed``;
-                other message types are ignored.
+            msg: an ``Imu``, ``NavSatFix``, ``HeadingStamped`` or ``WheelSpeed``
+                (and ``ConeDetections`` with a cone map); other message types
+                are ignored.
 
         Returns:
             What came of it, or None for a type the filter does not use.
@@ -228,6 +238,8 @@ class FusionEkf:
         """
         try:
             meas = to_measurement(msg, self.config)
+            if meas is None and self._cones is not None and isinstance(msg, ConeDetections):
+                meas = self._cones.measurement(msg)
         except InvalidMessage as err:
             self._health.reject(err.sensor, err.reason, err.stamp, err.detail)
             return UpdateResult(err.sensor, err.stamp, False, err.reason)
@@ -407,6 +419,9 @@ class FusionEkf:
             p[m.YAW, m.YAW] += sh2
             p[h, h] = sh2
             p[m.YAW, h] = p[h, m.YAW] = -sh2
+        b = self.layout.map_bias_index
+        if b is not None and self._cones is not None:
+            p[b : b + 2, b : b + 2] = self._cones.config.map_bias_sigma**2 * np.eye(2)
         return x, p
 
     # -- the history -------------------------------------------------------------------------
@@ -449,8 +464,13 @@ class FusionEkf:
         assert history is not None  # entries are only deferred while initialised
         for entry in later:
             replayed = self._apply(entry.measurement, history)
-            if replayed.accepted != entry.accepted:
-                self._health.revise(entry.measurement.sensor, entry.accepted, replayed.stamp)
+            if replayed.accepted != entry.accepted or replayed.reason != entry.reason:
+                sensor = entry.measurement.sensor
+                self._health.revise(sensor, entry.reason, replayed.reason, replayed.stamp)
+            if entry.cones is not None:
+                self._health.cones.add(entry.cones, -1)
+            if replayed.cones is not None:
+                self._health.cones.add(replayed.cones)
         history.prune()
 
     def _apply(self, meas: Measurement, history: History) -> UpdateResult:
@@ -469,13 +489,18 @@ class FusionEkf:
         else:
             self._predict_to(meas.stamp)
             result = self._update(meas)
-        history.append(Entry(meas, self._snapshot(), result.accepted, result.nis))
+        entry = Entry(
+            meas, self._snapshot(), result.accepted, result.nis, result.reason, result.cones
+        )
+        history.append(entry)
         return result
 
     def _count(self, result: UpdateResult) -> None:
         """Count a first decision; track gated fixes in a row."""
         if result.accepted:
             self._health.accept(result.sensor)
+        if result.cones is not None:
+            self._health.cones.add(result.cones)
         if result.sensor == Sensor.GPS:
             self._gps_rejections_in_row = 0 if result.accepted else self._gps_rejections_in_row + 1
 
@@ -494,6 +519,8 @@ class FusionEkf:
 
     def _update(self, meas: Measurement) -> UpdateResult:
         """Gate one measurement by its NIS and, if it passes, apply it."""
+        if meas.sensor == Sensor.CONES:
+            return self._update_cones(meas)
         ekf = self._ekf
         hx, jac, y = self._observe(meas, ekf.x)
         s = np.dot(jac, ekf.P).dot(jac.T) + meas.cov
@@ -506,6 +533,42 @@ class FusionEkf:
         ekf.update(meas.z, lambda _x: jac, lambda _x: hx, R=meas.cov, residual=lambda _z, _h: y)
         self._tidy()
         return UpdateResult(meas.sensor, meas.stamp, True, None, nis, dof)
+
+    def _update_cones(self, meas: Measurement) -> UpdateResult:
+        """Associate a cone scan with the map, gate the set by its joint NIS, apply it."""
+        cones = self._cones
+        assert cones is not None  # cone measurements are made only with a map
+        ekf = self._ekf
+        found = cones.associate(ekf.x, ekf.P, meas, self.layout)
+        counts = found.counts
+        if not len(found):
+            detail = f"none of {len(meas.z)} detections associated"
+            self._health.reject(Sensor.CONES, RejectReason.NO_ASSOCIATION, meas.stamp, detail)
+            return UpdateResult(
+                Sensor.CONES, meas.stamp, False, RejectReason.NO_ASSOCIATION, cones=counts
+            )
+        model = cones.model(ekf.x, meas, found, self.layout)
+        jac = model.jacobian
+        y = model.z - model.hx
+        s = np.dot(jac, ekf.P).dot(jac.T) + model.cov
+        nis = float(np.dot(y.T, np.linalg.solve(s, y)).item())
+        dof = y.shape[0]
+        gate = cones.joint_gate(dof)
+        if not nis <= gate:
+            counts.scans_gated, counts.ambiguous = 1, counts.ambiguous + counts.matched
+            counts.matched = 0
+            detail = f"joint NIS {nis:.3g} > {gate:.3g} ({dof} dof)"
+            self._health.reject(Sensor.CONES, RejectReason.NIS_GATE, meas.stamp, detail)
+            return UpdateResult(
+                Sensor.CONES, meas.stamp, False, RejectReason.NIS_GATE, nis, dof, counts
+            )
+        counts.nis_sum, counts.dof_sum = nis, dof
+        lo, hi = cones.nis_band(dof)
+        counts.nis_in_band = int(lo <= nis <= hi)
+        hx = model.hx
+        ekf.update(model.z, lambda _x: jac, lambda _x: hx, R=model.cov, residual=lambda _z, _h: y)
+        self._tidy()
+        return UpdateResult(Sensor.CONES, meas.stamp, True, None, nis, dof, counts)
 
     def _observe(
         self, meas: Measurement, x: FloatArray

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import logging
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from enum import StrEnum
 from typing import Final
 
@@ -31,6 +31,7 @@ class Sensor(StrEnum):
     WHEEL_SPEED = "wheel_speed"
     HEADING = "heading"
     GPS = "gps"
+    CONES = "cones"  # a cone-detection scan against the map (``localization.cones``)
 
 
 class RejectReason(StrEnum):
@@ -44,6 +45,7 @@ class RejectReason(StrEnum):
     TOO_OLD = "too_old"  # stamped before the oldest state the history holds
     TOO_NEW = "too_new"  # stamped more than max_stamp_jump after the newest message
     NIS_GATE = "nis_gate"  # Mahalanobis distance beyond the chi-square gate
+    NO_ASSOCIATION = "no_association"  # a cone scan with no detection matched to the map
 
 
 @dataclass(frozen=True, slots=True)
@@ -57,6 +59,7 @@ class UpdateResult:
         reason: why not, when rejected.
         nis: normalised innovation squared y' S^-1 y, for updates that got that far.
         dof: the measurement's dimension (the NIS's degrees of freedom).
+        cones: a cone scan's association counts, else None.
     """
 
     sensor: Sensor
@@ -65,6 +68,47 @@ class UpdateResult:
     reason: RejectReason | None = None
     nis: float | None = None
     dof: int = 0
+    cones: ConeCounts | None = None
+
+
+@dataclass(slots=True)
+class ConeCounts:
+    """What became of the detections of cone scans against the map (``localization.cones``).
+
+    Attributes:
+        scans: scans associated.
+        matched: detections matched to a map cone and used.
+        false_positives: detections with no map cone inside the gate.
+        colour_mismatches: detections whose only cones inside the gate have another colour.
+        ambiguous: detections left out because no unique, jointly compatible match exists.
+        misses: map cones in the detector's range and field of view that no
+            detection matched (occluded cones included).
+        scans_gated: scans whose associations failed the joint NIS gate (none used).
+        nis_sum: the joint NIS of the scans used, summed [-].
+        dof_sum: their degrees of freedom (2 per matched detection), summed [-].
+        nis_in_band: scans used whose NIS lies in its two-sided 95 % chi-square band.
+    """
+
+    scans: int = 0
+    matched: int = 0
+    false_positives: int = 0
+    colour_mismatches: int = 0
+    ambiguous: int = 0
+    misses: int = 0
+    scans_gated: int = 0
+    nis_sum: float = 0.0
+    dof_sum: int = 0
+    nis_in_band: int = 0
+
+    def add(self, other: ConeCounts, sign: int = 1) -> None:
+        """Add (``sign`` = -1: take away) another scan's counts."""
+        for f in fields(self):
+            name = f.name
+            setattr(self, name, getattr(self, name) + sign * getattr(other, name))
+
+    def as_dict(self) -> dict[str, float]:
+        """The counts by name."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
 
 
 @dataclass
@@ -77,6 +121,7 @@ class Health:
         resets: times the filter threw its state away and initialised again.
         replays: late messages that made the filter replay its history.
         discarded_before_init: good messages older than the initial state.
+        cones: the cone scans' association counts (``cones`` mode).
     """
 
     accepted: Counter[Sensor] = field(default_factory=Counter)
@@ -84,6 +129,7 @@ class Health:
     resets: int = 0
     replays: int = 0
     discarded_before_init: int = 0
+    cones: ConeCounts = field(default_factory=ConeCounts)
 
     def accept(self, sensor: Sensor) -> None:
         """Count one used message."""
@@ -100,15 +146,31 @@ class Health:
             reason, detail, count,
         )  # fmt: skip
 
-    def revise(self, sensor: Sensor, was_accepted: bool, stamp: float) -> None:
-        """Move a replayed message whose gate decision flipped to its new count."""
-        if was_accepted:
+    def revise(
+        self,
+        sensor: Sensor,
+        was: RejectReason | None,
+        now: RejectReason | None,
+        stamp: float,
+    ) -> None:
+        """Move a replayed message whose decision changed to its new count.
+
+        Args:
+            sensor: its stream.
+            was: the reason it was rejected the time before (None: it was accepted).
+            now: the reason it is rejected on replay (None: it is accepted).
+            stamp: its stamp [s].
+        """
+        if was is None:
             self.accepted[sensor] -= 1
-            self.reject(sensor, RejectReason.NIS_GATE, stamp, "gated on replay")
         else:
-            self.rejected[(sensor, RejectReason.NIS_GATE)] -= 1
+            self.rejected[(sensor, was)] -= 1
+        if now is None:
             self.accept(sensor)
             _log.debug("%s message at %.6f s accepted on replay", sensor, stamp)
+        else:
+            detail = "gated on replay" if now is RejectReason.NIS_GATE else f"{now} on replay"
+            self.reject(sensor, now, stamp, detail)
 
     def count(self, reason: RejectReason | None = None, sensor: Sensor | None = None) -> int:
         """Rejected messages, optionally of one reason and/or one sensor."""

@@ -23,12 +23,18 @@ from typing import Final, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from conesim.localization.ekf.health import Sensor
+from conesim.localization.ekf.health import ConeCounts, RejectReason, Sensor
 from conesim.localization.ekf.measurements import Measurement
 
 FloatArray = NDArray[np.float64]
 
-RANK: Final = {Sensor.IMU: 0, Sensor.WHEEL_SPEED: 1, Sensor.HEADING: 2, Sensor.GPS: 3}
+RANK: Final = {
+    Sensor.IMU: 0,
+    Sensor.WHEEL_SPEED: 1,
+    Sensor.HEADING: 2,
+    Sensor.GPS: 3,
+    Sensor.CONES: 4,
+}
 """Processing order of messages with equal stamps."""
 
 
@@ -62,12 +68,16 @@ class Entry:
         after: the state right after it.
         accepted: whether it was applied (False: gated).
         nis: its normalised innovation squared, if an update.
+        reason: why it was not applied, if it was not.
+        cones: a cone scan's association counts, else None.
     """
 
     measurement: Measurement
     after: Snapshot
     accepted: bool
     nis: float | None
+    reason: RejectReason | None = None
+    cones: ConeCounts | None = None
 
 
 def order_key(m: Measurement) -> tuple[float, int]:

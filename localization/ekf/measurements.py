@@ -68,14 +68,18 @@ class Measurement:
     Attributes:
         sensor: its stream; IMU samples are the filter's input, not a measurement.
         stamp: capture time [s].
-        z: measurement (m, 1); for the IMU the input (w_m, a_x, a_y), (3,).
-        cov: measurement covariance (m, m); for the IMU the input's, (3, 3).
+        z: measurement (m, 1); for the IMU the input (w_m, a_x, a_y), (3,); for
+            a cone scan the detections' (x, y) in the sensor frame, (k, 2) [m].
+        cov: measurement covariance (m, m); for the IMU the input's, (3, 3);
+            for a cone scan each detection's, (k, 2, 2).
+        labels: a cone scan's colour labels (k,), or None.
     """
 
     sensor: Sensor
     stamp: float
     z: FloatArray
     cov: FloatArray
+    labels: tuple[str, ...] | None = None
 
 
 def _check_header(sensor: Sensor, stamp: float, frame_id: str, expected: str) -> None:

@@ -16,7 +16,12 @@ State: the pose of ``gps_antenna`` in ``reference``, plus what the sensors need
  7  gps_bias_e    receiver error east (optional, Gauss-Markov)           m
  8  gps_bias_n    receiver error north (optional, Gauss-Markov)          m
  9  heading_bias  heading-sensor error (optional, Gauss-Markov)          rad
+10  map_bias_e    the cone map's offset east (optional, constant)        m
+11  map_bias_n    the cone map's offset north (optional, constant)       m
 ==  ============  =====================================================  ========
+
+(Indices of the optional states are those with every optional state
+present; each one absent moves the later ones down.)
 
 Why this state. The state lives at the antenna because the antenna *is* the
 ``gps_antenna`` frame the filter publishes (spec 000): GPS fixes observe it
@@ -42,6 +47,11 @@ averages it as if it were white and reports a covariance far too small (mean
 NEES near 55; REFERENCES.md, "Filter consistency"). With the bias in the state
 the covariance stays honest; the bias itself is not observable from GPS alone,
 so it still limits the absolute position error (only a map would remove it).
+The map's offset (``cones`` mode, ``localization.cones``) is the survey's
+datum error, one constant for the whole map: in the state, a receiver that
+is better than the map (RTK) estimates it, instead of the map's cones
+pulling the pose off by it, and with a poorer one the map's small prior
+keeps the pose on the map.
 
 Motion model and observation models
 -----------------------------------
@@ -92,15 +102,17 @@ class StateLayout:
     Attributes:
         gps_bias: whether the Gauss-Markov receiver error (east, north) is in the state.
         heading_bias: whether the Gauss-Markov heading-sensor error is in the state.
+        map_bias: whether the cone map's constant offset (east, north) is in the state.
     """
 
     gps_bias: bool = False
     heading_bias: bool = False
+    map_bias: bool = False
 
     @property
     def n(self) -> int:
         """State dimension."""
-        return N_CORE + 2 * self.gps_bias + self.heading_bias
+        return N_CORE + 2 * self.gps_bias + self.heading_bias + 2 * self.map_bias
 
     @property
     def gps_bias_index(self) -> int | None:
@@ -113,9 +125,15 @@ class StateLayout:
         return N_CORE + 2 * self.gps_bias if self.heading_bias else None
 
     @property
+    def map_bias_index(self) -> int | None:
+        """Index of map_bias_e (map_bias_n follows), or None."""
+        return N_CORE + 2 * self.gps_bias + self.heading_bias if self.map_bias else None
+
+    @property
     def names(self) -> tuple[str, ...]:
         """State names in index order."""
         extra = ("gps_bias_e", "gps_bias_n") * self.gps_bias + ("heading_bias",) * self.heading_bias
+        extra += ("map_bias_e", "map_bias_n") * self.map_bias
         return CORE_NAMES + extra
 
 

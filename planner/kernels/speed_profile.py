@@ -221,10 +221,13 @@ def profile_passes(s, kappa, v, jerk, has_start, v_start, has_end, v_end, passes
         return v
     out = np.empty(n)
     if ellipse:
+        share = passes.brake_lateral_share
+        brake_lat = a_lat * share
+        brake_aero = a_lat_aero * share
         out[n - 1] = v[n - 1]
         for i in range(n - 2, -1, -1):
             u = out[i + 1]
-            a = a_brake * _ellipse_scale(u, kappa[i], a_lat, a_lat_aero)
+            a = a_brake * _ellipse_scale(u, kappa[i], brake_lat, brake_aero)
             x = math.sqrt(u * u + 2.0 * a * (s[i + 1] - s[i]))
             out[i] = x if x < v[i] else v[i]
         return out

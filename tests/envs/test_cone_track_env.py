@@ -156,7 +156,7 @@ def _shape_of(value: object) -> object:
     return type(value)
 
 
-@pytest.mark.parametrize("localization", ["fused", "raw", "truth"])
+@pytest.mark.parametrize("localization", ["fused", "raw", "truth", "cones"])
 def test_info_has_one_shape_from_reset_to_every_step(localization: str) -> None:
     """Every info key keeps its type from reset() on (gymnasium's vector envs
     stack them key by key); before the first broadcast the localization error

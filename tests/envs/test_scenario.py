@@ -85,7 +85,10 @@ def test_an_overridden_receiver_gets_a_filter_that_models_it() -> None:
         ({"seed": 2**63}, "allowed [0, 2**63)"),
         ({"control_rate": 0.0}, "Scenario.control_rate = 0.0 is out of range: allowed > 0 [Hz]"),
         ({"control_rate": 30.0}, "physics_rate (200.0 Hz) must be a whole multiple"),
-        ({"localization": "gps"}, "Scenario.localization = 'gps': allowed fused, raw, truth"),
+        (
+            {"localization": "gps"},
+            "Scenario.localization = 'gps': allowed fused, raw, truth, cones",
+        ),
         ({"ekf_tuning": "fast"}, "Scenario.ekf_tuning = 'fast': allowed auto, ideal, rtk,"),
         ({"time_limit": -1.0}, "EpisodeRules.time_limit must be > 0 [s]"),
         ({"track": " "}, "Scenario.track = ' ': give a shipped track name or a file"),

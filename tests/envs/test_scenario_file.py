@@ -26,7 +26,7 @@ from conesim.planner import AutopilotConfig
 from conesim.sim.sensors import ConeFaults, Faults, GpsFaults, get_profile, override
 from conesim.sim.vehicle_params import VehicleParams
 from conesim.tracks import load_track
-from conesim.tracks.survey import PathSurvey
+from conesim.tracks.survey import ConeSurvey, PathSurvey
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "scenarios" / "example.yaml"
 
@@ -211,7 +211,7 @@ BAD = [
     ("track: 3\n",
      "s.yaml:1: track: expected a track name, a file or {generate: {seed: S, ...}}, got 3"),
     ("localization: gps\n",
-     "s.yaml:1: localization: expected one of 'fused', 'raw', 'truth', got 'gps'"),
+     "s.yaml:1: localization: expected one of 'fused', 'raw', 'truth', 'cones', got 'gps'"),
     ("sensors:\n  cones:\n    occlusion: maybe\n",
      "s.yaml:3: sensors.cones.occlusion: expected true or false, got 'maybe' (text)"),
     ("sensors:\n  gps:\n    fix_status: RTK\n",
@@ -295,3 +295,17 @@ def test_global_path_survey_is_read_and_checked() -> None:
         scenario_from_mapping({"global_path": {"noise": -1.0}})
     with pytest.raises(FieldError, match="unknown key 'nois'; allowed keys: noise, bias, seed"):
         scenario_from_mapping({"global_path": {"nois": 0.1}})
+
+
+def test_cone_map_survey_is_read_checked_and_shown() -> None:
+    """``cone_map: {noise, bias, seed}`` becomes a ConeSurvey (default 3 cm, 2 cm); ``show``
+    writes it and reads back the same; a bad value is one line."""
+    s = scenario_from_mapping({"localization": "cones", "cone_map": {"noise": 0.1, "seed": 2}})
+    assert s.localization == "cones" and s.cone_map == ConeSurvey(0.1, 0.02, 2)
+    assert scenario_from_mapping({}).cone_map == ConeSurvey(0.03, 0.02, 0)
+    shown = scenario_to_mapping(s)
+    assert shown["localization"] == "cones"
+    assert shown["cone_map"] == {"noise": 0.1, "bias": 0.02, "seed": 2}
+    assert scenario_from_mapping(shown).cone_map == s.cone_map
+    with pytest.raises(FieldError, match=r"cone_map.bias: ConeSurvey.bias = -1.0"):
+        scenario_from_mapping({"cone_map": {"bias": -1.0}})

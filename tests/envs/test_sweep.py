@@ -40,9 +40,10 @@ axes:
   seed: {range: [0, 4]}
 """
 """4 quick runs (about 0.4 s each, and a picture)."""
-KILLED_RUNS = 16
+KILLED_RUNS = 24
 LONGER = QUICK.replace("range: [0, 4]", f"range: [0, {KILLED_RUNS}]")
-"""16 of them: a sweep still busy when the test's signal lands, on any machine."""
+"""24 of them: a sweep still busy when the test's signal lands, on any machine
+(16 finished before it on a busy 2-core machine, the test starved of time)."""
 
 
 def comparable(out: Path) -> dict[str, Any]:
@@ -150,6 +151,52 @@ def test_a_killed_worker_loses_nothing(tmp_path: Path, serial_quick: dict[str, A
     assert comparable(tmp_path / "pool") == serial_quick
 
 
+def ray_actor_pids() -> list[int]:
+    """The pids of this process's local Ray's run actors (``ray::RunActor``: the raylet this
+    process started is their parent, so another test's Ray is left alone)."""
+
+    def parent(pid: int) -> int:
+        try:
+            return int(Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1])
+        except (OSError, ValueError, IndexError):
+            return 0
+
+    pids = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            command = (entry / "cmdline").read_bytes()
+        except OSError:
+            continue
+        pid = int(entry.name)
+        if command.startswith(b"ray::RunActor") and parent(parent(pid)) == os.getpid():
+            pids.append(pid)
+    return pids
+
+
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="finds the actors' processes in /proc")
+def test_a_killed_ray_actor_loses_nothing(tmp_path: Path, serial_quick: dict[str, Any]) -> None:
+    """A real local Ray's run actors killed mid-sweep: the runs they held run again on new
+    actors, every row once, the same as the serial sweep."""
+    pytest.importorskip("ray")
+    killed: list[int] = []
+
+    def kill_the_actors(row: dict[str, Any]) -> None:
+        if not killed:
+            killed.extend(ray_actor_pids())
+            for pid in killed:
+                os.kill(pid, signal.SIGKILL)
+
+    report = run_sweep(
+        load_sweep(sweep_file(tmp_path, QUICK)), tmp_path / "ray", workers=2, ray=LOCAL_RAY,
+        pictures="none", on_row=kill_the_actors,
+    )  # fmt: skip
+    assert len(killed) == 2
+    assert (report.ran, report.errors) == (4, 0)
+    assert comparable(tmp_path / "ray") == serial_quick
+
+
 def wait_for_rows(out: Path, count: int, proc: subprocess.Popen[bytes]) -> None:
     """Until ``out`` has ``count`` rows (a generous bound that only stops a hang)."""
     deadline = time.monotonic() + 300.0
@@ -173,7 +220,7 @@ def test_killed_sweep_resumes(tmp_path: Path, sig: signal.Signals, workers: str)
         command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True
     )
     try:
-        wait_for_rows(out, 2, proc)
+        wait_for_rows(out, 1, proc)
         if sig == signal.SIGKILL:
             os.killpg(proc.pid, sig)
         else:
@@ -184,10 +231,10 @@ def test_killed_sweep_resumes(tmp_path: Path, sig: signal.Signals, workers: str)
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
     if sig == signal.SIGINT:
-        assert proc.returncode == 130
+        assert proc.returncode == 130, err.decode()[-500:]
         assert b"interrupted; the runs finished are in" in err
     done = len(read_rows(out / RESULTS))  # a row cut short by the signal is not one
-    assert 2 <= done < KILLED_RUNS
+    assert 1 <= done < KILLED_RUNS
     again = subprocess.run(command, capture_output=True, text=True, check=False)
     assert again.returncode == 0, again.stderr
     n = KILLED_RUNS

@@ -229,7 +229,9 @@ def ref_speed_profile(
         v[-1] = 0.0 if v_end is None else min(v[-1], max(v_end, 0.0))
     if config.friction_ellipse:
         c = config
+        share = c.brake_lateral_share
         return ellipse_backward_pass(
-            s, v, kappa, c.a_brake, a_lat_max=c.a_lat_max, a_lat_aero=c.a_lat_aero
-        )
+            s, v, kappa, c.a_brake, a_lat_max=c.a_lat_max * share,
+            a_lat_aero=c.a_lat_aero * share,
+        )  # fmt: skip
     return backward_pass(s, v, config.a_brake)

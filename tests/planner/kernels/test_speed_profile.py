@@ -35,7 +35,7 @@ def assert_bits_equal(got: np.ndarray, expected: np.ndarray) -> None:
 # 2.5 -> 2, 0.25 m gives no window), downforce (none, default, more than
 # some paths' curvature), curvature window (off, default, 1.0 m = 4 steps of
 # 0.25 m exactly: int() of an integer), horizon stop; and the steering-rate
-# limit's weight floor below its default 1.
+# limit's weight floor below its default 1, and the brake ellipse's lateral share.
 PROFILE_CONFIGS = [
     SpeedProfileConfig(
         friction_ellipse=ellipse,
@@ -51,6 +51,7 @@ PROFILE_CONFIGS = [
     for window in (0.0, 2.0, 1.0)
     for stop in (True, False)
 ] + [SpeedProfileConfig(steering_weight_min=w) for w in (0.0, 0.4)]
+PROFILE_CONFIGS += [SpeedProfileConfig(brake_lateral_share=q) for q in (0.5, 0.8)]
 
 
 def profile_cases(rng: np.random.Generator, trials: int) -> list[np.ndarray]:
