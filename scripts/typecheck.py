@@ -7,7 +7,7 @@ pyproject.toml). mypy maps files to module names by folders only, so it
 cannot read that mapping. This script builds the namespace as mypy needs to
 see it, out of symbolic links under ``build/typecheck/`` (``conesim/sim ->
 sim``, ...; rebuilt on every run from pyproject's mapping), runs mypy on its
-files and on ``scripts/`` and ``benchmarks/``, and prints mypy's report with the
+files and on ``scripts/``, ``benchmarks/`` and ``examples/``, and prints mypy's report with the
 real file names.
 
 Usage: ``python scripts/typecheck.py [mypy options]`` (``make typecheck``).
@@ -26,7 +26,7 @@ from mypy import api
 
 ROOT = Path(__file__).resolve().parents[1]
 VIEW = ROOT / "build" / "typecheck"
-EXTRA = ("scripts", "benchmarks")  # checked as files, beside the package
+EXTRA = ("scripts", "benchmarks", "examples")  # checked as files, beside the package
 
 
 def package_dirs() -> dict[str, str]:
