@@ -36,10 +36,11 @@ from typing import Any
 
 import numpy as np
 
+from conesim.envs.scenario_file import Override, apply_override
 from conesim.envs.sweep import run_sweep
 from conesim.envs.sweep_file import BASE_LABEL, load_sweep
 from conesim.envs.sweep_store import read_rows
-from conesim.envs.yaml_io import dump_yaml
+from conesim.envs.yaml_io import dump_yaml, parse_value
 from conesim.tracks.generate import Size, TrackGenerationError, TrackSpec, generate_track
 
 SIZES: tuple[Size, ...] = ("small", "medium", "large")
@@ -67,12 +68,8 @@ def sweep_file(seeds: list[int], profiles: list[str], settings: list[str]) -> di
         "seed": 0,
     }
     for setting in settings:
-        key, _, value = setting.partition("=")
-        node = base
-        *parents, leaf = key.split(".")
-        for name in parents:
-            node = node.setdefault(name, {})
-        node[leaf] = json.loads(value) if value[:1] in "[{" else _scalar(value)
+        key, _, text = setting.partition("=")
+        apply_override(base, Override(key, parse_value(text), f"--set {setting}"))
     points = [
         {"track.generate.seed": s, "track.generate.size": SIZES[s % 3], "profile": p} | PROFILES[p]
         for s in seeds
@@ -82,16 +79,6 @@ def sweep_file(seeds: list[int], profiles: list[str], settings: list[str]) -> di
     for point in points:
         del point["profile"]
     return {"conesim_sweep": 1, "base": base, "points": points}
-
-
-def _scalar(text: str) -> Any:
-    """A ``--set`` value: a number, true / false, or text."""
-    for cast in (int, float):
-        try:
-            return cast(text)
-        except ValueError:
-            pass
-    return {"true": True, "false": False}.get(text, text)
 
 
 def profile_of(row: dict[str, Any]) -> str:

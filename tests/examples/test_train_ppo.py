@@ -1,6 +1,6 @@
 """A smoke run of the training baseline (examples/train_ppo.py): a few thousand
 steps of PPO, then the held-out evaluation on two tracks. It checks what the
-run writes, not how well the policy drives (README, "Training a policy", has
+run writes, not how well the policy drives (docs/TRAINING.md has
 the real run's figures). Skipped without the rl extra."""
 
 from __future__ import annotations
