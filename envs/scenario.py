@@ -47,7 +47,7 @@ from conesim.sim.world import WorldConfig
 from conesim.tracks import DEFAULT_TRACK, GeneratedTrack, Track, track_label
 from conesim.tracks.survey import ConeSurvey, PathSurvey
 
-Localization = Literal["fused", "raw", "truth", "cones"]
+Localization = Literal["fused", "raw", "truth", "cones", "slam"]
 """The localization modes (``localization.modes``)."""
 EkfTuning = Literal["auto", "ideal", "rtk", "consumer", "consumer_white", "custom"]
 """``auto`` (matched to the sensors), a shipped tuning, or ``custom`` (EkfConfig's defaults)."""
