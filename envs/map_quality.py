@@ -20,10 +20,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
+
+from conesim.sim.events import LapCompleted
+from conesim.tracks import Track
+from conesim.tracks.kinds import ConeKind
+
+if TYPE_CHECKING:
+    from conesim.envs.loop import ClosedLoop, StepRecord
 
 FloatArray = NDArray[np.float64]
 
@@ -117,4 +125,86 @@ def map_quality(
         offset_m=float(np.hypot(*shift)),
         rotation_deg=math.degrees(math.atan2(rot[1, 0], rot[0, 0])),
         nees_per_dof=float(nees.mean() / 2.0),
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class MapSnapshot:
+    """The map built while driving at one moment, with the truth it is scored against.
+
+    Attributes:
+        t: when [s].
+        lap: the laps completed then (1: right after the first) [-].
+        positions: the landmarks, (L, 2) [m].
+        covariances: their covariances, (L, 2, 2) [m^2].
+        labels: their colours (majority votes).
+        quality: the score against the cones as they stood then.
+    """
+
+    t: float
+    lap: int
+    positions: FloatArray
+    covariances: FloatArray
+    labels: tuple[str, ...]
+    quality: MapQuality
+
+
+class MapRecorder:
+    """Keeps the map of a ``slam`` run after its first lap (or at its end, without one).
+
+    ``observe`` each record of the loop; ``snapshot`` is the map after the
+    first completed lap, else the last one taken (``finish``).
+    """
+
+    def __init__(self) -> None:
+        self.snapshot: MapSnapshot | None = None
+        self._after_lap = False
+
+    def observe(self, loop: ClosedLoop, record: StepRecord) -> None:
+        """Take the map when the record completes the first lap."""
+        if self._after_lap or not any(
+            isinstance(e, LapCompleted) and e.lap == 1 for e in record.events
+        ):
+            return
+        self._after_lap = self._take(loop, record, 1)
+
+    def finish(self, loop: ClosedLoop, record: StepRecord) -> None:
+        """At the run's end: take the map if no lap was completed."""
+        if not self._after_lap:
+            self._take(loop, record, record.truth.race.laps_completed)
+
+    def _take(self, loop: ClosedLoop, record: StepRecord, lap: int) -> bool:
+        ekf = loop.localizer.ekf
+        state = None if ekf is None else ekf.landmark_state()
+        if state is None:
+            return False
+        xy, cov, book = state
+        quality = map_quality(xy, cov, np.asarray(record.truth.cones))
+        self.snapshot = MapSnapshot(record.t, lap, xy, cov, tuple(book.labels()), quality)
+        return True
+
+
+_KINDS: dict[str, ConeKind] = {
+    "blue": ConeKind.BLUE,
+    "yellow": ConeKind.YELLOW,
+    "orange": ConeKind.ORANGE,
+    "unknown": ConeKind.UNKNOWN,
+}
+
+
+def map_track(snapshot: MapSnapshot, track: Track) -> Track:
+    """The map as a track (``conesim run --track`` loads it once written with
+    ``tracks.write_track``): its landmarks as cones of their colour (orange
+    for both orange kinds: the detector does not tell them apart), ``track``'s
+    start pose and layout."""
+    return Track(
+        name=f"{track.name}_slam_map",
+        cones=snapshot.positions,
+        kinds=tuple(_KINDS[label] for label in snapshot.labels),
+        start_pose=track.start_pose,
+        layout=track.layout,
+        description=(
+            f"the cone map conesim's slam localization built on {track.name} "
+            f"(after lap {snapshot.lap}, t = {snapshot.t:.2f} s)"
+        ),
     )
