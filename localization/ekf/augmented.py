@@ -141,10 +141,10 @@ def add_landmarks(
     rot = np.array([[c, -s], [s, c]])
     rel = (points + np.asarray(offset)) @ rot.T  # m - p, (k, 2)
     m = rel + np.array([x.item(X), x.item(Y)])
-    gx = np.zeros((k, 2, 3))
-    gx[:, 0, 0] = gx[:, 1, 1] = 1.0
-    gx[:, 0, 2], gx[:, 1, 2] = -rel[:, 1], rel[:, 0]
-    gx = gx.reshape(2 * k, 3)
+    g3 = np.zeros((k, 2, 3))
+    g3[:, 0, 0] = g3[:, 1, 1] = 1.0
+    g3[:, 0, 2], g3[:, 1, 2] = -rel[:, 1], rel[:, 0]
+    gx = g3.reshape(2 * k, 3)
     pose = [X, Y, YAW]
     cross = np.dot(gx, p[pose])  # P_mx, (2k, n)
     block = np.dot(cross[:, pose], gx.T)

@@ -188,8 +188,13 @@ class FusionEkf:
         self, config: EkfConfig | None = None, cones: ConeUpdate | SlamUpdate | None = None
     ) -> None:
         self.config = config or EkfConfig()
-        self._cones = cones
-        self._slam: SlamUpdate | None = cones if getattr(cones, "maps_landmarks", False) else None  # type: ignore[assignment]
+        self._scans: ConeUpdate | SlamUpdate | None = cones  # makes the scans' measurements
+        self._slam: SlamUpdate | None = None
+        self._cones: ConeUpdate | None = None
+        if getattr(cones, "maps_landmarks", False):
+            self._slam = cones  # type: ignore[assignment]
+        else:
+            self._cones = cones  # type: ignore[assignment]
         map_bias = cones is not None and cones.config.map_bias_sigma > 0.0
         self.layout = dataclasses.replace(self.config.layout, map_bias=map_bias)
         self._health = Health()
@@ -272,8 +277,8 @@ class FusionEkf:
         """
         try:
             meas = to_measurement(msg, self.config)
-            if meas is None and self._cones is not None and isinstance(msg, ConeDetections):
-                meas = self._cones.measurement(msg)
+            if meas is None and self._scans is not None and isinstance(msg, ConeDetections):
+                meas = self._scans.measurement(msg)
         except InvalidMessage as err:
             self._health.reject(err.sensor, err.reason, err.stamp, err.detail)
             return UpdateResult(err.sensor, err.stamp, False, err.reason)

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Final
+from typing import Final, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -37,7 +37,10 @@ LABELS: Final = ("blue", "yellow", "orange")
 """The vote columns; the colour classes 0-2 of ``localization.cones.landmarks``."""
 
 
-def _frozen(a: NDArray[np.generic]) -> NDArray[np.generic]:
+_A = TypeVar("_A", bound=np.ndarray)
+
+
+def _frozen(a: _A) -> _A:
     a.setflags(write=False)
     return a
 

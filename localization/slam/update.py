@@ -148,7 +148,7 @@ class SlamUpdate(ScanUpdate):
             x, p = augmented.remove_landmarks(x, p, layout.n, stale)
             book = book.without(stale)
         fresh = found.unmatched
-        if found.counts.scans_gated or not len(fresh):  # a gated scan's pose is in doubt
+        if found.counts.scans_gated:  # a gated scan's pose is in doubt
             return x, p, book
         yaw = x.item(YAW)
         c, s = math.cos(yaw), math.sin(yaw)
