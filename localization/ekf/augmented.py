@@ -54,7 +54,7 @@ IntArray = NDArray[np.intp]
 def predict(
     x: FloatArray, p: FloatArray, xv_next: FloatArray, f: FloatArray, q: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
-    """x and P after the motion step (module docstring); new arrays.
+    """x and P after the motion step (module docstring); new arrays, P exactly symmetric.
 
     Args:
         x: the state, (n, 1).
@@ -69,11 +69,11 @@ def predict(
     x1[nv:] = x[nv:]
     p1 = np.empty_like(p)
     top = np.dot(f, p[:nv])  # F [P_vv, P_vm]
-    p1[:nv, :nv] = np.dot(top[:, :nv], f.T) + q
+    p1[:nv, :nv] = kernels.symmetrised(np.dot(top[:, :nv], f.T) + q)
     p1[:nv, nv:] = top[:, nv:]
     p1[nv:, :nv] = top[:, nv:].T
     p1[nv:, nv:] = p[nv:, nv:]
-    return x1, kernels.symmetrised(p1)
+    return x1, p1  # symmetric: the blocks off the diagonal are each other's transpose
 
 
 def update(
@@ -85,7 +85,7 @@ def update(
     *,
     fixed: int | None = None,
 ) -> tuple[FloatArray, FloatArray]:
-    """x and P after a measurement (module docstring); new arrays.
+    """x and P after a measurement (module docstring); new arrays, P re-symmetrised.
 
     Args:
         x: the state, (n, 1).

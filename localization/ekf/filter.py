@@ -696,10 +696,12 @@ class FusionEkf:
         return hx, jac, obs.residual(meas.z, hx)
 
     def _tidy(self) -> None:
-        """Wrap yaw and re-symmetrise P after a predict or an update (both new arrays)."""
+        """Wrap yaw and re-symmetrise P after a predict or an update (both new arrays;
+        the structured steps of ``slam`` return P symmetric already)."""
         ekf = self._ekf
         ekf.x[m.YAW, 0] = m.wrap_yaw(ekf.x.item(m.YAW))
-        ekf.P = kernels.symmetrised(ekf.P)  # 0.5 * (P + P'), compiled
+        if self._slam is None:
+            ekf.P = kernels.symmetrised(ekf.P)  # 0.5 * (P + P'), compiled
 
     def _snapshot(self) -> Snapshot:
         """The filter's state, sharing its arrays (made read-only)."""
