@@ -33,19 +33,15 @@ of wall time each on one core).
 
 from __future__ import annotations
 
-import argparse
 import math
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
-from bench_cone_localization import counts, rms
+from bench_cone_localization import counts, drive_all, report
 
 from conesim.envs.runner import RunResult, run_scenario
 from conesim.envs.scenario import Scenario
 from conesim.sim.sensors import get_profile
-from conesim.tracks import GeneratedTrack, TrackSpec, shipped_tracks
-
-from timing import pymunk_reference
+from conesim.tracks import GeneratedTrack, shipped_tracks
 
 CONFIGS = {
     "consumer fused": ("consumer", "fused"),
@@ -103,19 +99,6 @@ def one_run(job: tuple[str | GeneratedTrack, str]) -> Run:
     )  # fmt: skip
 
 
-def report(config: str, rows: list[Run]) -> float:
-    """Print one configuration's line; its real-time factor."""
-    clean = sum(r.clean for r in rows)
-    rtf = sum(r.sim_time for r in rows) / sum(r.wall_time for r in rows)
-    pos, yaw = [r.pos_rmse for r in rows], [r.yaw_rmse for r in rows]
-    bad = ", ".join(f"{r.track}:{r.end}" for r in rows if not r.clean) or "-"
-    print(
-        f"  {config:16s} {rms(pos):6.3f} {max(pos):6.3f}  {rms(yaw):5.2f} {max(yaw):5.2f}  "
-        f"{100.0 * clean / len(rows):5.1f} %  {rtf:5.1f}x  {bad}"
-    )
-    return rtf
-
-
 def map_report(config: str, rows: list[Run]) -> None:
     """Print a slam configuration's map after lap 1 and its clean second laps."""
     maps = [r.map_quality for r in rows if r.map_quality is not None]
@@ -145,20 +128,9 @@ def map_report(config: str, rows: list[Run]) -> None:
 
 def main() -> None:
     """Print the figures."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--generated", type=int, default=16, help="generated tracks")
-    parser.add_argument("--first", type=int, default=6000, help="first generated seed")
-    parser.add_argument("--jobs", type=int, default=1, help="worker processes")
-    args = parser.parse_args()
-    generated = [
-        GeneratedTrack(s, TrackSpec()) for s in range(args.first, args.first + args.generated)
-    ]
-    tracks: list[str | GeneratedTrack] = [*shipped_tracks(), *generated]
-    jobs = [(t, c) for t in tracks for c in CONFIGS]
-    before = pymunk_reference()
-    with ProcessPoolExecutor(max(1, args.jobs)) as pool:
-        results = list(pool.map(one_run, jobs))
-    after = pymunk_reference()
+    args, results, before, after = drive_all(
+        __doc__, CONFIGS, one_run, generated=16, first=6000, jobs=1
+    )
     last = args.first + args.generated - 1
     print(
         f"slam localization: {len(shipped_tracks())} shipped tracks + generated "
@@ -166,7 +138,7 @@ def main() -> None:
     )
     print(f"  {'configuration':16s} pos RMSE [m]   yaw [deg]    clean    RTF    not clean")
     print(f"  {'':16s} rms    worst   rms   worst")
-    rtf = {c: report(c, [r for r in results if r.config == c]) for c in CONFIGS}
+    rtf = {c: report(c, [r for r in results if r.config == c]) for c in CONFIGS}  # type: ignore[misc]
     for c in CONFIGS:
         rows = [r for r in results if r.config == c]
         counts(c, rows)  # type: ignore[arg-type]
