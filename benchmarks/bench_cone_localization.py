@@ -32,8 +32,10 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Callable, Iterable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
+from typing import TypeVar
 
 from conesim.envs.runner import run_scenario
 from conesim.envs.scenario import Scenario
@@ -55,6 +57,7 @@ CONFIGS = {
     "rtk cones": ("rtk", "cones", Faults()),
     "consumer cones faults": ("consumer", "cones", FAULTS),
 }
+R = TypeVar("R")
 TARGETS = "targets: consumer cones RMSE <= 0.20 m, <= 0.5 deg, clean >= 95 %; faults clean >= 90 %"
 
 
@@ -131,22 +134,38 @@ def counts(config: str, rows: list[Run]) -> None:
     )  # fmt: skip
 
 
-def main() -> None:
-    """Print the figures."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--generated", type=int, default=6, help="generated tracks")
-    parser.add_argument("--first", type=int, default=3000, help="first generated seed")
-    parser.add_argument("--jobs", type=int, default=2, help="worker processes")
+def drive_all(
+    doc: str,
+    configs: Iterable[str],
+    run: Callable[[tuple[str | GeneratedTrack, str]], R],
+    *,
+    generated: int,
+    first: int,
+    jobs: int,
+) -> tuple[argparse.Namespace, list[R], float, float]:
+    """Parse the options, run every track with every configuration in ``jobs`` worker
+    processes; (the options, the runs, bare pymunk's steps/s before and after)."""
+    parser = argparse.ArgumentParser(description=doc.splitlines()[0])
+    parser.add_argument("--generated", type=int, default=generated, help="generated tracks")
+    parser.add_argument("--first", type=int, default=first, help="first generated seed")
+    parser.add_argument("--jobs", type=int, default=jobs, help="worker processes")
     args = parser.parse_args()
-    generated = [
-        GeneratedTrack(s, TrackSpec()) for s in range(args.first, args.first + args.generated)
+    seeds = range(args.first, args.first + args.generated)
+    tracks: list[str | GeneratedTrack] = [
+        *shipped_tracks(),
+        *(GeneratedTrack(s, TrackSpec()) for s in seeds),
     ]
-    tracks: list[str | GeneratedTrack] = [*shipped_tracks(), *generated]
-    jobs = [(t, c) for t in tracks for c in CONFIGS]
     before = pymunk_reference()
     with ProcessPoolExecutor(max(1, args.jobs)) as pool:
-        results = list(pool.map(one_run, jobs))
-    after = pymunk_reference()
+        results = list(pool.map(run, [(t, c) for t in tracks for c in configs]))
+    return args, results, before, pymunk_reference()
+
+
+def main() -> None:
+    """Print the figures."""
+    args, results, before, after = drive_all(
+        __doc__, CONFIGS, one_run, generated=6, first=3000, jobs=2
+    )
     last = args.first + args.generated - 1
     print(
         f"cone-map localization: {len(shipped_tracks())} shipped tracks + generated "

@@ -306,6 +306,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise CliError(f"--out {exc}") from None
     if args.render:
         _check_render_extra()
+    save_map = _check_save_map(args.save_map, scenario)
     bar = ProgressBar(sys.stderr) if sys.stderr.isatty() and not args.json else None
     # What is the user's already, for removing the bag again: an empty
     # directory they made stays, parents made for the bag go.
@@ -328,11 +329,42 @@ def cmd_run(args: argparse.Namespace) -> int:
 
             remove_bag(args.bag, bag_existed, bag_parents)
         raise
+    if save_map is not None:
+        _write_map(save_map, result, track)
     if args.json:
         print(payload)
     else:
         print(format_result(result, out, args.bag, args.scenario))
     return EXIT_OK if result.finished else EXIT_FAILED
+
+
+def _check_save_map(path: str | None, scenario: Scenario) -> Path | None:
+    """``--save-map``'s file, checked before the run (slam only; a .yaml file, not a directory)."""
+    if path is None:
+        return None
+    if scenario.localization != "slam":
+        raise CliError(
+            f"--save-map needs --localization slam (the scenario's is {scenario.localization!r})"
+        )
+    target = Path(path)
+    if target.suffix not in (".yaml", ".yml"):
+        raise CliError(f"--save-map {path}: a conesim track file ends in .yaml")
+    if target.is_dir():
+        raise CliError(f"--save-map {path}: is a directory")
+    return target
+
+
+def _write_map(path: Path, result: RunResult, track: Track) -> None:
+    """Write the run's map (after lap 1, else at the end) as a conesim track file."""
+    from conesim.envs.map_quality import map_track  # noqa: PLC0415 (with the loop: cmd_run)
+
+    snap = result.slam_map
+    if snap is None or not len(snap.positions):
+        raise CliError("--save-map: the run built no map (the filter never initialised)")
+    try:
+        write_track(map_track(snap, track), path)
+    except OSError as exc:
+        raise CliError(f"--save-map {path}: cannot write the map ({os_reason(exc)})") from None
 
 
 @contextlib.contextmanager
@@ -419,6 +451,7 @@ def format_result(
         ),
         ("midline RMSE", f"{num(result.midline_rmse_m, '.3f')} m"),
         ("planner fallbacks", str(result.planner_fallbacks)),
+        *_map_rows(result),
         (
             "sim / wall time",
             f"{result.sim_time_s:.2f} s / {result.wall_time_s:.2f} s "
@@ -428,6 +461,23 @@ def format_result(
     ]
     width = max(len(k) for k, _ in rows)
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
+
+
+def _map_rows(result: RunResult) -> list[tuple[str, str]]:
+    """The map's rows of the results table (``slam`` localization), else none."""
+    q = result.map_quality
+    if q is None:
+        return []
+    lap = result.map_quality_lap
+    when = f"after lap {lap}" if lap else "at the end"
+    return [
+        (
+            "map " + when,
+            f"{q['landmarks']} landmarks for {q['cones']} cones, {q['missed']} missed, "
+            f"{q['spurious']} spurious; error {q['mean_error_m']:.3f} m mean, "
+            f"{q['mean_error_aligned_m']:.3f} m with the best rigid fit removed",
+        )
+    ]
 
 
 def main(argv: Sequence[str] | None = None) -> int:

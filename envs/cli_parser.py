@@ -143,6 +143,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="also record the run as a ROS 2 bag (rosbag2, MCAP) in the new directory DIR "
         "(ros extra)",
     )
+    run.add_argument(
+        "--save-map",
+        metavar="FILE",
+        help="with --localization slam: write the map after the first lap as a conesim "
+        "track file (.yaml) that --track can load",
+    )
 
     _sweep_options(
         sub.add_parser(

@@ -30,6 +30,7 @@ from conesim.envs.scenario import EkfTuning, Localization, Scenario
 from conesim.envs.scenario_file import load_scenario, track_from_data
 from conesim.localization.ekf import EkfConfig
 from conesim.localization.modes import LOCALIZATION_MODES
+from conesim.localization.slam import SlamConfig
 from conesim.planner import AutopilotConfig
 from conesim.sim.sensors import PROFILES as SENSOR_PROFILES
 from conesim.sim.sensors import Faults, SensorProfile, get_profile
@@ -122,6 +123,7 @@ class EnvConfig:
         vehicle: the car.
         cone_map: the cone map's survey error (``cones`` localization), as
             ``Scenario.cone_map``.
+        slam: how ``slam`` localization builds its map, as ``Scenario.slam``.
         autopilot: the settings ``AutopilotExpert`` drives with by default
             (None: the localization's default); the env itself has no driver.
     """
@@ -150,6 +152,7 @@ class EnvConfig:
     ekf_tuning: EkfTuning = "auto"
     vehicle: VehicleParams = dataclasses.field(default_factory=VehicleParams)
     cone_map: ConeSurvey = dataclasses.field(default_factory=ConeSurvey)
+    slam: SlamConfig = dataclasses.field(default_factory=SlamConfig)
     autopilot: AutopilotConfig | None = None
 
     def __post_init__(self) -> None:
@@ -160,6 +163,7 @@ class EnvConfig:
             ("faults", Faults),
             ("vehicle", VehicleParams),
             ("cone_map", ConeSurvey),
+            ("slam", SlamConfig),
             ("ekf", EkfConfig),
             ("track_spec", TrackSpec),
         )
@@ -301,6 +305,7 @@ SCENARIO_FIELDS = {
     "autopilot": "autopilot",
     "vehicle": "vehicle",
     "cone_map": "cone_map",
+    "slam": "slam",
 }
 """``EnvConfig`` key -> the ``Scenario`` field it is (all but the scenario's seed)."""
 

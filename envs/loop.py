@@ -42,6 +42,7 @@ from conesim.localization.cones import ConeUpdate, ConeUpdateConfig, LandmarkMap
 from conesim.localization.ekf import EkfConfig
 from conesim.localization.frames import Buffer, TransformStamped
 from conesim.localization.localizer import Localizer
+from conesim.localization.slam import SlamConfig, SlamUpdate
 from conesim.planner.autopilot import CONTROL_RATE, AutopilotStep
 from conesim.planner.messages import ControlCommand
 from conesim.sim.events import Event, RaceStanding
@@ -264,8 +265,11 @@ class ClosedLoop:
             (``tracks.survey``); default exact.
         cone_map: how far the cone map (``cones`` localization) is off the
             cones as they stand (``tracks.survey.ConeSurvey``); default a few cm.
-        cones: the cone update's settings (``cones`` localization); default
-            matched to the world's cone detector (``envs.ekf_tuning``).
+        cones: the cone update's settings (``cones`` and ``slam``
+            localization); default matched to the world's cone detector
+            (``envs.ekf_tuning``).
+        slam: the map building's settings (``slam`` localization); the
+            filter starts on the track's start pose (the antenna's there).
 
     Attributes:
         track, world_config, rules, control_rate, substeps: as given or derived.
@@ -291,6 +295,7 @@ class ClosedLoop:
         survey: PathSurvey | None = None,
         cone_map: ConeSurvey | None = None,
         cones: ConeUpdateConfig | None = None,
+        slam: SlamConfig | None = None,
     ) -> None:
         self.track = track
         self.rules = rules or EpisodeRules()
@@ -313,12 +318,13 @@ class ClosedLoop:
             global_path_for_track(track, self.world_config.origin), survey or PathSurvey()
         )
         self.cone_update: ConeUpdate | None = None
+        self.cone_config = cones or matched_cone_update(self.world_config.sensor_profile)
+        self.slam_config = slam or SlamConfig()
         if localization == "cones":
             landmarks = LandmarkMap(
                 surveyed_cones(track.cones, cone_map or ConeSurvey()), track.kinds
             )
-            config = cones or matched_cone_update(self.world_config.sensor_profile)
-            self.cone_update = ConeUpdate(landmarks, config)
+            self.cone_update = ConeUpdate(landmarks, self.cone_config)
         self._driver_factory = driver
         self.driver: Driver | None = None
         self.record: StepRecord | None = None
@@ -346,9 +352,13 @@ class ClosedLoop:
             driver's first command.
         """
         self.world = world = World(self.track, self.world_config, seed, start_pose)
+        slam = None
+        if self.localization == "slam":
+            slam = SlamUpdate(self.cone_config, self.slam_config, start=world.antenna_pose)
         self.localizer = Localizer(
-            self.localization, self.ekf_config, self.world_config.origin, cones=self.cone_update
-        )
+            self.localization, self.ekf_config, self.world_config.origin,
+            cones=self.cone_update, slam=slam,
+        )  # fmt: skip
         first = world.initial_messages
         sent = self.localizer.step(0.0, first, world.antenna_pose)
         factory = self._driver_factory

@@ -29,6 +29,7 @@ from conesim.core.geodesy import GeodesyError
 from conesim.envs.bag import BagRecorder
 from conesim.envs.limit_lap import track_lap_limit
 from conesim.envs.loop import ClosedLoop, StepRecord, world_seed
+from conesim.envs.map_quality import MapRecorder, MapSnapshot
 from conesim.envs.metrics import RunEvents, RunMetrics, RunTrace
 from conesim.envs.render import Renderer, SceneKeeper
 from conesim.envs.scenario import Scenario
@@ -86,9 +87,13 @@ class RunResult:
     lap_time_ratio: float | None
     events: RunEvents = field(default_factory=RunEvents)
     cone_associations: dict[str, float] | None = None
+    landmarks: dict[str, int | bool] | None = None
+    map_quality: dict[str, float] | None = None
+    map_quality_lap: int | None = None
     trace: RunTrace = field(repr=False, default_factory=RunTrace)
     scenario: dict[str, Any] = field(repr=False, default_factory=dict)
     racing_line: FloatArray | None = field(repr=False, default=None)
+    slam_map: MapSnapshot | None = field(repr=False, default=None)
 
     @property
     def clean(self) -> bool:
@@ -100,6 +105,7 @@ class RunResult:
         out = asdict(self)
         out.pop("trace")
         out.pop("racing_line")
+        out.pop("slam_map")
         out["clean"] = self.clean
         return out
 
@@ -242,6 +248,7 @@ def _drive(
 ) -> RunResult:
     """Drive the episode from its first record; ``setup0``: when building began (perf_counter)."""
     metrics = RunMetrics(loop.track)
+    mapped = MapRecorder()
     if recorder is not None:
         recorder.start(loop)
     limit = loop.rules.time_limit_s
@@ -252,6 +259,7 @@ def _drive(
     setup = wall0 - setup0
     while True:
         metrics.add(record)
+        mapped.observe(loop, record)
         if recorder is not None:
             recorder.record(record)
         if window is not None:
@@ -262,7 +270,14 @@ def _drive(
         if progress is not None:
             progress(record.t, limit)
     wall = time.perf_counter() - wall0
-    return _result(loop, record, metrics, seed=seed, wall=wall, setup=setup)
+    mapped.finish(loop, record)
+    result = _result(loop, record, metrics, seed=seed, wall=wall, setup=setup)
+    snap = mapped.snapshot
+    if snap is not None:
+        result.slam_map = snap
+        result.map_quality = snap.quality.as_dict()
+        result.map_quality_lap = snap.lap
+    return result
 
 
 def _result(
@@ -299,14 +314,22 @@ def _result(
         lap_time_ratio=None if best is None else best / limit.limit_s,
         events=metrics.events,
         cone_associations=_cone_associations(loop),
+        landmarks=_landmarks(loop),
         trace=metrics.trace,
         racing_line=limit.racing_line,
     )
 
 
 def _cone_associations(loop: ClosedLoop) -> dict[str, float] | None:
-    """The filter's cone association counts (``cones`` localization), else None."""
+    """The filter's cone association counts (``cones``, ``slam`` localization), else None."""
     ekf = loop.localizer.ekf
-    if loop.cone_update is None or ekf is None:
+    if loop.localization not in ("cones", "slam") or ekf is None:
         return None
     return ekf.health.cones.as_dict()
+
+
+def _landmarks(loop: ClosedLoop) -> dict[str, int | bool] | None:
+    """The map's landmark counts at the end (``slam`` localization), else None."""
+    ekf = loop.localizer.ekf
+    counts = None if ekf is None else ekf.health.landmarks
+    return None if counts is None else counts.as_dict()

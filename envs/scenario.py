@@ -39,6 +39,7 @@ from conesim.envs.ekf_tuning import matched_cone_update, matched_ekf, tuning_nam
 from conesim.envs.loop import ClosedLoop, DriverFactory, EpisodeRules
 from conesim.localization.ekf import EkfConfig, for_profile
 from conesim.localization.modes import LOCALIZATION_MODES
+from conesim.localization.slam import SlamConfig
 from conesim.planner import AutopilotConfig
 from conesim.planner.autopilot import CONTROL_RATE, default_config
 from conesim.sim.sensors import DEFAULT_PROFILE, Faults, SensorProfile, apply_faults, get_profile
@@ -47,7 +48,7 @@ from conesim.sim.world import WorldConfig
 from conesim.tracks import DEFAULT_TRACK, GeneratedTrack, Track, track_label
 from conesim.tracks.survey import ConeSurvey, PathSurvey
 
-Localization = Literal["fused", "raw", "truth", "cones"]
+Localization = Literal["fused", "raw", "truth", "cones", "slam"]
 """The localization modes (``localization.modes``)."""
 EkfTuning = Literal["auto", "ideal", "rtk", "consumer", "consumer_white", "custom"]
 """``auto`` (matched to the sensors), a shipped tuning, or ``custom`` (EkfConfig's defaults)."""
@@ -72,7 +73,8 @@ class Scenario:
         control_rate: the loop's clock: the autopilot's (or action's) rate [Hz].
         physics_rate: physics steps per second [Hz], a multiple of control_rate.
         localization: ``fused`` (EKF), ``raw`` (the ROS pipeline's), ``truth``,
-            or ``cones`` (the EKF with the cone scans against the cone map).
+            ``cones`` (the EKF with the cone scans against the cone map), or
+            ``slam`` (the EKF building the cone map as it drives).
         sensors: the sensors, as the team knows them (before the faults).
         faults: what goes wrong with them.
         ekf: the filter's settings; None: the tuning ``ekf_tuning`` names.
@@ -84,6 +86,8 @@ class Scenario:
             track's (``tracks.survey.PathSurvey``: per-point noise, a bias).
         cone_map: how far the cone map of ``cones`` localization is off the
             cones (``tracks.survey.ConeSurvey``: per-cone noise, a bias).
+        slam: how ``slam`` localization builds its map
+            (``localization.slam.SlamConfig``).
     """
 
     track: str | GeneratedTrack = DEFAULT_TRACK
@@ -103,6 +107,7 @@ class Scenario:
     vehicle: VehicleParams = field(default_factory=VehicleParams)
     global_path: PathSurvey = field(default_factory=PathSurvey)
     cone_map: ConeSurvey = field(default_factory=ConeSurvey)
+    slam: SlamConfig = field(default_factory=SlamConfig)
 
     def __post_init__(self) -> None:
         track = self.track
@@ -158,6 +163,7 @@ class Scenario:
             ("vehicle", VehicleParams),
             ("global_path", PathSurvey),
             ("cone_map", ConeSurvey),
+            ("slam", SlamConfig),
         )
         for name, kind in parts:
             value = getattr(self, name)
@@ -240,4 +246,5 @@ class Scenario:
             survey=self.global_path,
             cone_map=self.cone_map,
             cones=matched_cone_update(self.sensors),
+            slam=self.slam,
         )

@@ -12,7 +12,7 @@ The format (version 1; every key optional, the defaults are ``conesim run``'s)::
     end_on_stuck: true
     control_rate: 50.0         # [Hz]
     physics_rate: 200.0        # [Hz], a multiple of control_rate
-    localization: fused        # fused | raw | truth | cones
+    localization: fused        # fused | raw | truth | cones | slam
     sensors:                   # or just a profile's name: "sensors: consumer"
       profile: rtk             # the shipped profile the fields below change
       cones: {max_range: 20.0} # any field of GpsConfig, HeadingConfig, ... by section
@@ -28,6 +28,7 @@ The format (version 1; every key optional, the defaults are ``conesim run``'s)::
     vehicle: {mass: 200.0}     # any VehicleParams field
     global_path: {noise: 0.2, bias: 0.3, seed: 1}   # the surveyed path's error [m]
     cone_map: {noise: 0.03, bias: 0.02, seed: 0}    # the cone map's error (cones mode) [m]
+    slam: {confirm_scans: 3, prune_misses: 5}       # building the map (slam mode)
 
 Overrides (``--set sensors.cones.max_range=20``, or ``load_scenario(path,
 {"laps": 3})``) change the file's mapping before it is checked, so an
@@ -58,6 +59,7 @@ from conesim.envs.ekf_tuning import matched_ekf
 from conesim.envs.scenario import AutopilotPreset, EkfTuning, Scenario
 from conesim.envs.yaml_io import Lines, dump_yaml, read_yaml
 from conesim.localization.ekf import EkfConfig, for_profile
+from conesim.localization.slam import SlamConfig
 from conesim.planner import AutopilotConfig
 from conesim.planner.autopilot import default_config
 from conesim.sim.sensors import DEFAULT_PROFILE, PROFILES, Faults, SensorProfile, get_profile
@@ -72,7 +74,7 @@ SCALARS = (
     "control_rate", "physics_rate", "localization",
 )  # fmt: skip
 """The top-level keys that are plain values, in the order ``show`` writes them."""
-GROUPS = ("sensors", "faults", "ekf", "autopilot", "vehicle", "global_path", "cone_map")
+GROUPS = ("sensors", "faults", "ekf", "autopilot", "vehicle", "global_path", "cone_map", "slam")
 TOP_KEYS = (FORMAT_KEY, *SCALARS, *GROUPS)
 SHORTHAND = {"sensors": "profile", "ekf": "tuning", "autopilot": "preset"}
 """A group given as a plain name means this key of it (``sensors: consumer``)."""
@@ -217,6 +219,8 @@ def _scenario(data: dict[str, Any]) -> Scenario:
         values["global_path"] = build(PathSurvey, data["global_path"], path=("global_path",))
     if data.get("cone_map") is not None:
         values["cone_map"] = build(ConeSurvey, data["cone_map"], path=("cone_map",))
+    if data.get("slam") is not None:
+        values["slam"] = build(SlamConfig, data["slam"], path=("slam",))
     try:
         return Scenario(**values)
     except ValueError as exc:
@@ -407,6 +411,7 @@ def scenario_to_mapping(scenario: Scenario) -> dict[str, Any]:
     out["vehicle"] = plain(full.vehicle)
     out["global_path"] = plain(full.global_path)
     out["cone_map"] = plain(full.cone_map)
+    out["slam"] = plain(full.slam)
     return out
 
 

@@ -1,12 +1,14 @@
 """The car's localization: measurements in, the frame tree out (spec 000).
 
 One :class:`Localizer` per car wires the ROS pipeline's localization nodes into one
-frame tree, in one of four modes (``LOCALIZATION_MODES``):
+frame tree, in one of five modes (``LOCALIZATION_MODES``):
 
 - ``fused`` (default): every measurement goes into the fusion EKF
   (``localization.ekf``); the broadcaster publishes its estimate.
 - ``cones``: as ``fused``, and each cone scan is matched to a known cone map
   and updates the filter's pose (``localization.cones``).
+- ``slam``: as ``fused``, and the cone scans build the map the filter
+  localizes against, the landmarks in its state (``localization.slam``).
 - ``raw``: the ROS pipeline as written: ``/ublox_gps_node/fix`` ->
   ``gps_to_local_cartesian`` -> ``/local_xy``, and ``/global_yaw``, cached
   by the broadcaster.
@@ -39,6 +41,7 @@ from conesim.localization.ekf import EkfConfig, Estimate, FusionEkf
 from conesim.localization.frames import LATEST, Buffer, TransformError, TransformStamped
 from conesim.localization.gps_to_local import GpsToLocalCartesian
 from conesim.localization.modes import LOCALIZATION_MODES, LocalizationMode
+from conesim.localization.slam import SlamUpdate
 
 
 @dataclass(frozen=True, slots=True)
@@ -58,15 +61,17 @@ class Localizer:
     """GPS-to-local, the fusion EKF and the TF broadcaster around one frame tree.
 
     Args:
-        mode: ``fused``, ``raw``, ``truth`` or ``cones``.
-        ekf: the filter's settings (``fused`` and ``cones``; see ``ekf.for_profile``).
+        mode: ``fused``, ``raw``, ``truth``, ``cones`` or ``slam``.
+        ekf: the filter's settings (``fused``, ``cones``, ``slam``; see ``ekf.for_profile``).
         origin: the geodetic origin of ``reference``.
         broadcaster: the broadcaster's rate and frame names (its mode is ``mode``).
         cones: the cone map and its update (required in ``cones`` mode, else unused).
+        slam: the map-building update (``slam`` mode; default ``SlamUpdate()``,
+            starting at the first fix).
 
     Attributes:
         frames: the frame tree (tf2's buffer) the car's software reads.
-        ekf: the fusion filter in ``fused`` and ``cones`` modes, else None.
+        ekf: the fusion filter in ``fused``, ``cones`` and ``slam`` modes, else None.
         broadcaster: the vehicle TF broadcaster.
 
     Raises:
@@ -79,7 +84,9 @@ class Localizer:
         ekf: EkfConfig | None = None,
         origin: ReferenceOrigin = DEFAULT_ORIGIN,
         broadcaster: BroadcasterConfig | None = None,
+        *,
         cones: ConeUpdate | None = None,
+        slam: SlamUpdate | None = None,
     ) -> None:
         if mode not in LOCALIZATION_MODES:
             raise ValueError(
@@ -94,6 +101,8 @@ class Localizer:
             self.ekf = FusionEkf(ekf)
         elif self.mode is LocalizationMode.CONES:
             self.ekf = FusionEkf(ekf, cones)
+        elif self.mode is LocalizationMode.SLAM:
+            self.ekf = FusionEkf(ekf, slam or SlamUpdate())
         self._gps_to_local = GpsToLocalCartesian(origin)
         config = dataclasses.replace(broadcaster or BroadcasterConfig(), mode=self.mode)
         self.broadcaster = VehicleTfBroadcaster(self.frames, config, ekf=self.ekf)
@@ -135,7 +144,7 @@ class Localizer:
             return None
 
     def estimate(self, t: float) -> Estimate | None:
-        """The filter's estimate at ``t`` [s] (``fused``, ``cones``; once initialised)."""
+        """The filter's estimate at ``t`` [s] (``fused``, ``cones``, ``slam``; once initialised)."""
         if self.ekf is None or not self.ekf.initialised:
             return None
         return self.ekf.estimate(t)

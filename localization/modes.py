@@ -20,12 +20,14 @@ class LocalizationMode(StrEnum):
     """The true pose (a baseline and a debugging aid)."""
     CONES = "cones"
     """The fusion EKF with each cone scan matched to a known cone map (``localization.cones``)."""
+    SLAM = "slam"
+    """The fusion EKF building the cone map as it drives: EKF-SLAM (``localization.slam``)."""
 
     @property
     def uses_ekf(self) -> bool:
         """Whether the broadcaster publishes the fusion EKF's estimate."""
-        return self in (LocalizationMode.FUSED, LocalizationMode.CONES)
+        return self in (LocalizationMode.FUSED, LocalizationMode.CONES, LocalizationMode.SLAM)
 
 
 LOCALIZATION_MODES = tuple(mode.value for mode in LocalizationMode)
-"""The modes' names: ``fused``, ``raw``, ``truth``, ``cones``."""
+"""The modes' names: ``fused``, ``raw``, ``truth``, ``cones``, ``slam``."""

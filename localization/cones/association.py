@@ -40,7 +40,7 @@ that nothing matched, a miss.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -64,11 +64,16 @@ class Association:
         detections: indices of the matched detections, (a,).
         landmarks: the map cone of each, (a,).
         counts: the scan's counts (``scans`` = 1; ``matched`` = a).
+        missed: the map cones in range and field of view that nothing matched, (misses,).
+        unmatched: the detections with no map cone in their gate (the false
+            positives; a map being built takes them as candidates), (false_positives,).
     """
 
     detections: IntArray
     landmarks: IntArray
     counts: ConeCounts
+    missed: IntArray = field(default_factory=lambda: _NONE)
+    unmatched: IntArray = field(default_factory=lambda: _NONE)
 
     def __len__(self) -> int:
         return len(self.detections)
@@ -95,14 +100,17 @@ def _mahalanobis(
 ) -> FloatArray:
     """d^2 of each pair: detection at ``w`` (q, 2) with world covariance ``rw``
     (q, 2, 2) against map cone ``cones`` (q, 2), offset included (module
-    docstring, step 2); ``pk``: P over (x, y, yaw[, map_bias]), (3, 3) or (5, 5)."""
+    docstring, step 2); ``pk``: P over (x, y, yaw[, map_bias]), (3, 3) or (5, 5),
+    or per pair over (x, y, yaw, cone), (q, 5, 5), when the cones are states (SLAM)."""
     d = cones - pose[:2]
-    a = np.zeros((len(cones), 2, len(pk)))
+    k = pk.shape[-1]
+    a = np.zeros((len(cones), 2, k))
     a[:, 0, 0] = a[:, 1, 1] = -1.0
     a[:, 0, 2], a[:, 1, 2] = d[:, 1], -d[:, 0]
-    if len(pk) == 5:
+    if k == 5:
         a[:, 0, 3] = a[:, 1, 4] = 1.0
-    s = np.einsum("qik,kl,qjl->qij", a, pk, a) + rw
+    spec = "qik,kl,qjl->qij" if pk.ndim == 2 else "qik,qkl,qjl->qij"
+    s = np.einsum(spec, a, pk, a) + rw
     n0, n1 = w[:, 0] - cones[:, 0], w[:, 1] - cones[:, 1]
     s00, s01, s11 = s[:, 0, 0], s[:, 0, 1], s[:, 1, 1]
     det = s00 * s11 - s01 * s01
@@ -143,17 +151,20 @@ def _consensus(
     return det[chosen], cone[chosen]
 
 
-def _misses(lmap: LandmarkMap, pose: FloatArray, cfg: ConeUpdateConfig, matched: IntArray) -> int:
+def _missed(
+    lmap: LandmarkMap, pose: FloatArray, cfg: ConeUpdateConfig, matched: IntArray
+) -> IntArray:
     """Map cones in range and field of view (from the prior pose) that nothing matched."""
     rot = _rotation(float(pose[2]))
     sensor = pose[:2] + rot @ np.asarray(cfg.sensor_offset)
     near = np.asarray(lmap.tree.query_ball_point(sensor, cfg.max_range), dtype=np.intp)
     if not len(near):
-        return 0
+        return _NONE
     rel = (lmap.positions[near] - sensor) @ rot  # into the sensor frame: R' (m - s)
     r = np.hypot(rel[:, 0], rel[:, 1])
     seen = (r >= cfg.min_range) & (np.abs(np.arctan2(rel[:, 1], rel[:, 0])) <= 0.5 * cfg.fov)
-    return int(seen.sum() - np.isin(near[seen], matched).sum())
+    in_view = near[seen]
+    return np.sort(in_view[~np.isin(in_view, matched)])
 
 
 def associate(
@@ -167,6 +178,7 @@ def associate(
     cfg: ConeUpdateConfig,
     gate: float,
     bias: int | None = None,
+    landmarks: int | None = None,
 ) -> Association:
     """Match a scan's detections to map cones (module docstring).
 
@@ -180,6 +192,10 @@ def associate(
         cfg: the settings.
         gate: the pairs' chi-square gate (2 dof).
         bias: the index of ``map_bias_e`` in ``x``, or None.
+        landmarks: with the cones in the state (SLAM, ``localization.slam``):
+            the index of cone 0's east in ``x`` (cone j at ``landmarks + 2 j``;
+            ``lmap`` holds their positions), so each pair's gate takes the
+            cone's covariance and its correlation with the pose; else None.
     """
     k = len(points)
     pose = np.array([x.item(X), x.item(Y), x.item(YAW)])
@@ -195,13 +211,14 @@ def associate(
     bound = (
         p3[0, 0] + p3[1, 1] + p3[2, 2] * reach * reach
         + 2.0 * math.hypot(p3[0, 2], p3[1, 2]) * reach + rw[:, 0, 0] + rw[:, 1, 1]
-        + 2.0 * float(np.trace(pk[3:, 3:]))
+        + 2.0 * float(np.trace(pk[3:, 3:])) + 2.0 * _largest_cone_variance(p, landmarks)
     )  # fmt: skip
     radius = np.minimum(np.sqrt(gate * bound), cfg.max_search_radius)
     det, cone = _candidates(lmap, w, radius)
     counts = ConeCounts(scans=1)
     if len(det):
-        d2 = _mahalanobis(pose - [*shift, 0.0], pk, w[det], rw[det], lmap.positions[cone])
+        pair_cov = pk if landmarks is None else _pair_covariance(p, landmarks, cone)
+        d2 = _mahalanobis(pose - [*shift, 0.0], pair_cov, w[det], rw[det], lmap.positions[cone])
         gated = d2 <= gate
         det, cone = det[gated], cone[gated]
     has_geo = np.zeros(k, dtype=bool)
@@ -224,5 +241,21 @@ def associate(
             det, cone = _NONE, _NONE
     counts.matched = len(det)
     counts.ambiguous = int(has_ok.sum()) - len(det)
-    counts.misses = _misses(lmap, pose, cfg, cone)
-    return Association(det, cone, counts)
+    missed = _missed(lmap, pose, cfg, cone)
+    counts.misses = len(missed)
+    return Association(det, cone, counts, missed, np.flatnonzero(~has_geo))
+
+
+def _largest_cone_variance(p: FloatArray, landmarks: int | None) -> float:
+    """The largest trace of a state cone's 2x2 covariance (0 without cones in the state)."""
+    if landmarks is None or landmarks >= len(p):
+        return 0.0
+    var = np.diagonal(p)[landmarks:]
+    return float((var[0::2] + var[1::2]).max())
+
+
+def _pair_covariance(p: FloatArray, landmarks: int, cone: IntArray) -> FloatArray:
+    """P over (x, y, yaw, cone east, cone north) for each pair's cone, (q, 5, 5)."""
+    col = landmarks + 2 * cone
+    idx = np.column_stack([np.full((len(cone), 3), [X, Y, YAW]), col, col + 1])
+    return p[idx[:, :, None], idx[:, None, :]]

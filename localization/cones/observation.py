@@ -10,6 +10,8 @@ sensor at ``o`` in the antenna frame::
             = [[-sin yaw, cos yaw], [-cos yaw, -sin yaw]] (m + b - p)   (2, 1)
 
 and zero for every other state (the GPS and heading errors do not enter).
+With the cones in the state (SLAM, ``localization.slam``) each cone's own
+columns get dh/dm = R(yaw)^T, as the offset's do.
 The detection's covariance comes from the detector's range and bearing noise
 at the measured point (r, b), plus the map's survey error::
 
@@ -62,9 +64,14 @@ def h_cones(
 
 
 def jacob_h_cones(
-    x: FloatArray, landmarks: FloatArray, n: int, bias: int | None = None
+    x: FloatArray,
+    landmarks: FloatArray,
+    n: int,
+    bias: int | None = None,
+    columns: NDArray[np.intp] | None = None,
 ) -> FloatArray:
-    """H of :func:`h_cones`, (2a, n): only the x, y, yaw (and map_bias) columns are non-zero."""
+    """H of :func:`h_cones`, (2a, n): only the x, y, yaw (and map_bias) columns are non-zero,
+    and, with ``columns`` (a,) (each cone's east index in a SLAM state), each cone's own two."""
     yaw = x.item(YAW)
     c, s = math.cos(yaw), math.sin(yaw)
     dx, dy = _relative(x, landmarks, bias)
@@ -76,6 +83,10 @@ def jacob_h_cones(
     if bias is not None:
         h[:, 0, bias], h[:, 0, bias + 1] = c, s
         h[:, 1, bias], h[:, 1, bias + 1] = -s, c
+    if columns is not None:
+        rows = np.arange(len(landmarks))
+        h[rows, 0, columns], h[rows, 0, columns + 1] = c, s
+        h[rows, 1, columns], h[rows, 1, columns + 1] = -s, c
     return h.reshape(-1, n)
 
 

@@ -44,16 +44,14 @@ class StackedModel:
     cov: FloatArray
 
 
-class ConeUpdate:
-    """Cone scans against a map, for :class:`~localization.ekf.filter.FusionEkf`.
+class ScanUpdate:
+    """What every cone-scan update shares: the scan's checks, its covariance, the gates.
 
     Args:
-        landmarks: the map.
         config: the detector's noise, gates and colours.
     """
 
-    def __init__(self, landmarks: LandmarkMap, config: ConeUpdateConfig | None = None) -> None:
-        self.landmarks = landmarks
+    def __init__(self, config: ConeUpdateConfig | None = None) -> None:
         self.config = config or ConeUpdateConfig()
         self.pair_gate = float(chi2.ppf(self.config.gate_probability, 2))
         self._joint_gates: dict[int, float] = {}
@@ -94,6 +92,19 @@ class ConeUpdate:
         cov = detection_covariance(points, self.config)
         cov.setflags(write=False)
         return Measurement(Sensor.CONES, stamp, points, cov, msg.colours)
+
+
+class ConeUpdate(ScanUpdate):
+    """Cone scans against a map, for :class:`~localization.ekf.filter.FusionEkf`.
+
+    Args:
+        landmarks: the map.
+        config: the detector's noise, gates and colours.
+    """
+
+    def __init__(self, landmarks: LandmarkMap, config: ConeUpdateConfig | None = None) -> None:
+        super().__init__(config)
+        self.landmarks = landmarks
 
     def associate(
         self, x: FloatArray, p: FloatArray, meas: Measurement, layout: StateLayout

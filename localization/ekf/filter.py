@@ -77,7 +77,7 @@ from numpy.typing import NDArray
 from scipy.stats import chi2
 
 from conesim.core.messages import ConeDetections, Message
-from conesim.localization.ekf import kernels
+from conesim.localization.ekf import augmented, kernels
 from conesim.localization.ekf import model as m
 from conesim.localization.ekf.config import EkfConfig
 from conesim.localization.ekf.estimate import Estimate
@@ -87,7 +87,10 @@ from conesim.localization.ekf.measurements import InvalidMessage, Measurement, t
 from conesim.localization.ekf.observation import OBSERVATIONS
 
 if TYPE_CHECKING:
+    from conesim.localization.cones.association import Association
     from conesim.localization.cones.update import ConeUpdate
+    from conesim.localization.slam.book import MapBook
+    from conesim.localization.slam.update import SlamUpdate
 
 ESTIMATE_CACHE_SIZE = 8  # estimates kept (per stamp) for repeated calls
 
@@ -153,6 +156,12 @@ def propagate(snap: Snapshot, t: float, step: m.MotionStep) -> tuple[FloatArray,
     dt = t - snap.t
     if dt <= 0.0:
         return snap.x, snap.P
+    nv = step.model.layout.n
+    if len(snap.x) > nv:  # landmarks in the state (SLAM)
+        xv, f, q = step(snap.x[:nv], snap.u, snap.u_cov, dt)
+        x1, p1 = augmented.predict(snap.x, snap.P, xv, f, q)
+        x1[m.YAW, 0] = m.wrap_yaw(x1.item(m.YAW))
+        return x1, p1
     x1, f, q = step(snap.x, snap.u, snap.u_cov, dt)
     x1[m.YAW, 0] = m.wrap_yaw(x1.item(m.YAW))
     return x1, kernels.symmetrised(np.dot(f, snap.P).dot(f.T) + q)
@@ -165,16 +174,27 @@ class FusionEkf:
         config: noise model, gating, history; default :class:`EkfConfig`.
         cones: the cone map and its update (``cones`` mode,
             :mod:`localization.cones`): each ``ConeDetections`` scan then
-            updates the pose; None ignores the scans.
+            updates the pose; or the map built while driving (``slam``
+            mode, :mod:`localization.slam`): the landmarks then join the
+            state after the vehicle's, and the Kalman steps are the
+            structured ones of :mod:`.augmented`; None ignores the scans.
 
     Attributes:
         config: the settings.
         layout: the state layout.
     """
 
-    def __init__(self, config: EkfConfig | None = None, cones: ConeUpdate | None = None) -> None:
+    def __init__(
+        self, config: EkfConfig | None = None, cones: ConeUpdate | SlamUpdate | None = None
+    ) -> None:
         self.config = config or EkfConfig()
-        self._cones = cones
+        self._scans: ConeUpdate | SlamUpdate | None = cones  # makes the scans' measurements
+        self._slam: SlamUpdate | None = None
+        self._cones: ConeUpdate | None = None
+        if getattr(cones, "maps_landmarks", False):
+            self._slam = cones  # type: ignore[assignment]
+        else:
+            self._cones = cones  # type: ignore[assignment]
         map_bias = cones is not None and cones.config.map_bias_sigma > 0.0
         self.layout = dataclasses.replace(self.config.layout, map_bias=map_bias)
         self._health = Health()
@@ -205,12 +225,31 @@ class FusionEkf:
         self._gps_rejections_in_row = 0
         self._stale_in_row = 0  # messages in a row rejected as too old or too new
         self._estimates: dict[float | None, tuple[Snapshot, Estimate]] = {}
+        self._book: MapBook | None = None if self._slam is None else self._slam.empty_book()
 
     @property
     def health(self) -> Health:
         """Counters of accepted and rejected messages (a deferred replay is counted first)."""
         self._replay_deferred()
+        if self._history is not None and self._history.latest.book is not None:
+            self._health.landmarks = self._history.latest.book.counts()
         return self._health
+
+    def landmark_state(self) -> tuple[FloatArray, FloatArray, MapBook] | None:
+        """The map being built (``slam`` mode): positions (L, 2) [m], their covariances
+        (L, 2, 2) [m^2] and the book (colours, counts); None in other modes or before
+        initialisation."""
+        if self._slam is None or self._history is None:
+            return None
+        self._replay_deferred()
+        snap = self._history.latest
+        assert snap.book is not None
+        nv = self.layout.n
+        xy = snap.x[nv:, 0].reshape(-1, 2)
+        var = snap.P[nv:, nv:]
+        idx = np.arange(len(xy))
+        cov = var.reshape(len(xy), 2, len(xy), 2)[idx, :, idx, :]
+        return xy.copy(), np.array(cov), snap.book
 
     @property
     def initialised(self) -> bool:
@@ -238,8 +277,8 @@ class FusionEkf:
         """
         try:
             meas = to_measurement(msg, self.config)
-            if meas is None and self._cones is not None and isinstance(msg, ConeDetections):
-                meas = self._cones.measurement(msg)
+            if meas is None and self._scans is not None and isinstance(msg, ConeDetections):
+                meas = self._scans.measurement(msg)
         except InvalidMessage as err:
             self._health.reject(err.sensor, err.reason, err.stamp, err.detail)
             return UpdateResult(err.sensor, err.stamp, False, err.reason)
@@ -315,11 +354,17 @@ class FusionEkf:
         x, p = propagate(snap, t, self._step)
         yaw_rate = snap.u.item(0) - x.item(m.GYRO_BIAS)
         # x, p: the snapshot's (read-only) arrays or new ones only this estimate holds.
-        est = Estimate.from_state(t, x, p, yaw_rate, self.layout.names, copy=False)
+        est = Estimate.from_state(t, x, p, yaw_rate, self._names(len(x)), copy=False)
         if len(self._estimates) >= ESTIMATE_CACHE_SIZE:
             self._estimates.clear()
         self._estimates[stamp] = (snap, est)
         return est
+
+    def _names(self, n: int) -> tuple[str, ...]:
+        """The state's names, landmarks (``landmark_<j>_e``, ``_n``) after the vehicle's."""
+        names = self.layout.names
+        extra = range((n - len(names)) // 2)
+        return names + tuple(f"landmark_{j}_{a}" for j in extra for a in ("e", "n"))
 
     # -- initialisation ----------------------------------------------------------------------
 
@@ -359,7 +404,7 @@ class FusionEkf:
         imus = [q for q in self._pending if q.sensor == Sensor.IMU and q.stamp <= fix.stamp]
         u, u_cov = (imus[-1].z, imus[-1].cov) if imus else (NO_IMU_INPUT, NO_IMU_COV)
         x, p = self._initial_state(fix, heading, wheel)
-        base = Snapshot(fix.stamp, _freeze(x), _freeze(p), u, u_cov)
+        base = Snapshot(fix.stamp, _freeze(x), _freeze(p), u, u_cov, self._book)
         history = History(base, self.config.history_window)
         self._history = history
         self._restore(base)
@@ -422,7 +467,36 @@ class FusionEkf:
         b = self.layout.map_bias_index
         if b is not None and self._cones is not None:
             p[b : b + 2, b : b + 2] = self._cones.config.map_bias_sigma**2 * np.eye(2)
+        if self._slam is not None and self._slam.start is not None:
+            self._start_at(x, p, fix, heading)
         return x, p
+
+    def _start_at(
+        self, x: FloatArray, p: FloatArray, fix: Measurement, heading: Measurement
+    ) -> None:
+        """Put the pose on the known start (``slam`` mode), in place: the map's frame is the
+        start's. The fix and the heading then measure their sensors' errors: with a bias
+        state, bias = measured - start, of variance R + start's and correlation -start's
+        (measured = state + bias); without one they update the pose as usual later."""
+        slam = self._slam
+        assert slam is not None and slam.start is not None
+        start = slam.start
+        sxy2, syaw2 = slam.slam.start_sigma**2, slam.slam.start_yaw_sigma**2
+        g, h = self.layout.gps_bias_index, self.layout.heading_bias_index
+        x[m.X, 0], x[m.Y, 0], x[m.YAW, 0] = start.x, start.y, start.yaw
+        pose = slice(m.X, m.YAW + 1)
+        p[pose, :] = 0.0
+        p[:, pose] = 0.0
+        p[m.X, m.X] = p[m.Y, m.Y] = sxy2
+        p[m.YAW, m.YAW] = syaw2
+        if g is not None:
+            x[g : g + 2] = fix.z - [[start.x], [start.y]]
+            p[g : g + 2, g : g + 2] = fix.cov + sxy2 * np.eye(2)
+            p[m.X : m.Y + 1, g : g + 2] = p[g : g + 2, m.X : m.Y + 1] = -sxy2 * np.eye(2)
+        if h is not None:
+            x[h, 0] = m.wrap_yaw(heading.z.item(0) - start.yaw)
+            p[h, h] = heading.cov.item(0) + syaw2
+            p[m.YAW, h] = p[h, m.YAW] = -syaw2
 
     # -- the history -------------------------------------------------------------------------
 
@@ -512,8 +586,13 @@ class FusionEkf:
         if dt <= 0.0:
             return
         ekf = self._ekf
-        ekf.x_next, ekf.F, ekf.Q = self._step(ekf.x, self._u, self._u_cov, dt)
-        ekf.predict(u=self._u)
+        if self._slam is None:
+            ekf.x_next, ekf.F, ekf.Q = self._step(ekf.x, self._u, self._u_cov, dt)
+            ekf.predict(u=self._u)
+        else:
+            nv = self.layout.n
+            xv, f, q = self._step(ekf.x[:nv], self._u, self._u_cov, dt)
+            ekf.x, ekf.P = augmented.predict(ekf.x, ekf.P, xv, f, q)
         self._tidy()
         self._t = t
 
@@ -523,23 +602,56 @@ class FusionEkf:
             return self._update_cones(meas)
         ekf = self._ekf
         hx, jac, y = self._observe(meas, ekf.x)
-        s = np.dot(jac, ekf.P).dot(jac.T) + meas.cov
+        nv = jac.shape[1]  # the vehicle's states: fewer than the state's with landmarks
+        p = ekf.P if nv == len(ekf.P) else ekf.P[:nv, :nv]
+        s = np.dot(jac, p).dot(jac.T) + meas.cov
         nis = _nis(y, s)
         dof = y.shape[0]
         if not nis <= self._gates[dof]:
             detail = f"NIS {nis:.3g} > {self._gates[dof]:.3g} ({dof} dof)"
             self._health.reject(meas.sensor, RejectReason.NIS_GATE, meas.stamp, detail)
             return UpdateResult(meas.sensor, meas.stamp, False, RejectReason.NIS_GATE, nis, dof)
-        ekf.update(meas.z, lambda _x: jac, lambda _x: hx, R=meas.cov, residual=lambda _z, _h: y)
-        self._tidy()
+        self._correct(meas.z, hx, jac, meas.cov, y)
         return UpdateResult(meas.sensor, meas.stamp, True, None, nis, dof)
 
-    def _update_cones(self, meas: Measurement) -> UpdateResult:
-        """Associate a cone scan with the map, gate the set by its joint NIS, apply it."""
-        cones = self._cones
-        assert cones is not None  # cone measurements are made only with a map
+    def _correct(
+        self, z: FloatArray, hx: FloatArray, jac: FloatArray, cov: FloatArray, y: FloatArray
+    ) -> None:
+        """The Kalman update with a gated measurement: filterpy's, or with landmarks in the
+        state (``slam``) the structured one (:mod:`.augmented`, H over the first columns)."""
         ekf = self._ekf
-        found = cones.associate(ekf.x, ekf.P, meas, self.layout)
+        if self._slam is None:
+            ekf.update(z, lambda _x: jac, lambda _x: hx, R=cov, residual=lambda _z, _h: y)
+        else:
+            book = self._book
+            fixed = self.layout.n if book is not None and book.closed else None
+            ekf.x, ekf.P = augmented.update(ekf.x, ekf.P, y, jac, cov, fixed=fixed)
+        self._tidy()
+
+    def _update_cones(self, meas: Measurement) -> UpdateResult:
+        """Associate a cone scan with the map, gate the set by its joint NIS, apply it;
+        building the map (``slam``), then the map step (:mod:`localization.slam.update`)."""
+        ekf = self._ekf
+        slam = self._slam
+        if slam is None:
+            cones = self._cones
+            assert cones is not None  # cone measurements are made only with a map
+            found = cones.associate(ekf.x, ekf.P, meas, self.layout)
+            return self._scan_update(meas, found, cones)
+        book = self._book
+        assert book is not None
+        found = slam.associate(ekf.x, ekf.P, meas, self.layout, book)
+        result = self._scan_update(meas, found, slam)
+        ekf.x, ekf.P, self._book = slam.map_step(
+            ekf.x, ekf.P, meas, found, used=result.accepted, book=book, layout=self.layout
+        )
+        return result
+
+    def _scan_update(
+        self, meas: Measurement, found: Association, cones: ConeUpdate | SlamUpdate
+    ) -> UpdateResult:
+        """Gate a scan's associated detections by their joint NIS and apply them."""
+        ekf = self._ekf
         counts = found.counts
         if not len(found):
             detail = f"none of {len(meas.z)} detections associated"
@@ -565,9 +677,7 @@ class FusionEkf:
         counts.nis_sum, counts.dof_sum = nis, dof
         lo, hi = cones.nis_band(dof)
         counts.nis_in_band = int(lo <= nis <= hi)
-        hx = model.hx
-        ekf.update(model.z, lambda _x: jac, lambda _x: hx, R=model.cov, residual=lambda _z, _h: y)
-        self._tidy()
+        self._correct(model.z, model.hx, jac, model.cov, y)
         return UpdateResult(Sensor.CONES, meas.stamp, True, None, nis, dof, counts)
 
     def _observe(
@@ -586,15 +696,17 @@ class FusionEkf:
         return hx, jac, obs.residual(meas.z, hx)
 
     def _tidy(self) -> None:
-        """Wrap yaw and re-symmetrise P after a predict or an update (both new arrays)."""
+        """Wrap yaw and re-symmetrise P after a predict or an update (both new arrays;
+        the structured steps of ``slam`` return P symmetric already)."""
         ekf = self._ekf
         ekf.x[m.YAW, 0] = m.wrap_yaw(ekf.x.item(m.YAW))
-        ekf.P = kernels.symmetrised(ekf.P)  # 0.5 * (P + P'), compiled
+        if self._slam is None:
+            ekf.P = kernels.symmetrised(ekf.P)  # 0.5 * (P + P'), compiled
 
     def _snapshot(self) -> Snapshot:
         """The filter's state, sharing its arrays (made read-only)."""
         ekf = self._ekf
-        return Snapshot(self._t, _freeze(ekf.x), _freeze(ekf.P), self._u, self._u_cov)
+        return Snapshot(self._t, _freeze(ekf.x), _freeze(ekf.P), self._u, self._u_cov, self._book)
 
     def _restore(self, snap: Snapshot) -> None:
         """Load a snapshot into the filter (its arrays are replaced, never written, from here)."""
@@ -603,3 +715,4 @@ class FusionEkf:
         self._t = snap.t
         self._u = snap.u
         self._u_cov = snap.u_cov
+        self._book = snap.book

@@ -111,6 +111,29 @@ class ConeCounts:
         return {f.name: getattr(self, f.name) for f in fields(self)}
 
 
+@dataclass(frozen=True, slots=True)
+class LandmarkCounts:
+    """The map being built (``slam`` mode, ``localization.slam``).
+
+    Attributes:
+        confirmed: landmarks in the map now.
+        tentative: candidates waiting for more sightings.
+        pruned: landmarks removed after too many misses.
+        ever_confirmed: landmarks that ever entered the map.
+        loop_closed: whether the loop has closed (the map's membership is final).
+    """
+
+    confirmed: int = 0
+    tentative: int = 0
+    pruned: int = 0
+    ever_confirmed: int = 0
+    loop_closed: bool = False
+
+    def as_dict(self) -> dict[str, int | bool]:
+        """The counts by name."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+
 @dataclass
 class Health:
     """Counters of accepted and rejected messages.
@@ -121,7 +144,8 @@ class Health:
         resets: times the filter threw its state away and initialised again.
         replays: late messages that made the filter replay its history.
         discarded_before_init: good messages older than the initial state.
-        cones: the cone scans' association counts (``cones`` mode).
+        cones: the cone scans' association counts (``cones`` and ``slam`` modes).
+        landmarks: the map being built (``slam`` mode), else None.
     """
 
     accepted: Counter[Sensor] = field(default_factory=Counter)
@@ -130,6 +154,7 @@ class Health:
     replays: int = 0
     discarded_before_init: int = 0
     cones: ConeCounts = field(default_factory=ConeCounts)
+    landmarks: LandmarkCounts | None = None
 
     def accept(self, sensor: Sensor) -> None:
         """Count one used message."""

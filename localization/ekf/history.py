@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import bisect
 from dataclasses import dataclass
-from typing import Final, NamedTuple
+from typing import Any, Final, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -50,6 +50,8 @@ class Snapshot(NamedTuple):
         P: covariance, (n, n).
         u: IMU input held from ``t`` on, (3,).
         u_cov: its per-sample covariance, (3, 3).
+        book: the map's bookkeeping when the filter builds a map
+            (``localization.slam.book.MapBook``, immutable), else None.
     """
 
     t: float
@@ -57,6 +59,7 @@ class Snapshot(NamedTuple):
     P: FloatArray
     u: FloatArray
     u_cov: FloatArray
+    book: Any = None
 
 
 @dataclass(slots=True)

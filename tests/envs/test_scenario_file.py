@@ -211,7 +211,7 @@ BAD = [
     ("track: 3\n",
      "s.yaml:1: track: expected a track name, a file or {generate: {seed: S, ...}}, got 3"),
     ("localization: gps\n",
-     "s.yaml:1: localization: expected one of 'fused', 'raw', 'truth', 'cones', got 'gps'"),
+     "s.yaml:1: localization: expected one of 'fused', 'raw', 'truth', 'cones', 'slam', got 'gps'"),
     ("sensors:\n  cones:\n    occlusion: maybe\n",
      "s.yaml:3: sensors.cones.occlusion: expected true or false, got 'maybe' (text)"),
     ("sensors:\n  gps:\n    fix_status: RTK\n",

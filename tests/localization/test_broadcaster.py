@@ -119,7 +119,7 @@ def test_truth_mode_publishes_the_given_pose() -> None:
 
 def test_bad_settings_raise_with_the_allowed_values() -> None:
     """Unknown mode lists the modes; fused without a filter raises."""
-    with pytest.raises(ValueError, match="allowed: \\['fused', 'raw', 'truth', 'cones'\\]"):
+    with pytest.raises(ValueError, match="allowed: \\['fused', 'raw', 'truth', 'cones', 'slam'\\]"):
         BroadcasterConfig(mode="gps")  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="needs the FusionEkf"):
         VehicleTfBroadcaster(Buffer())
