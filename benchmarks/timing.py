@@ -6,11 +6,14 @@ originals back on exit. The benchmarks use it to show the floor that a
 library the design card names sets (filterpy's EKF in ``bench_env``,
 scipy's Delaunay and splprep in ``bench_planner``), measured in the real
 run, on its real data, with its real cache state. ``pymunk_reference`` is
-the machine's speed, measured beside a figure (``write_results``, ``bench_env``).
+the machine's speed, measured beside a figure (``write_results``, ``bench_env``);
+``two_process_scaling`` is how far two processes scale on it now (``bench_env``).
 """
 
 from __future__ import annotations
 
+import multiprocessing
+import statistics
 import time
 from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
@@ -73,3 +76,38 @@ def pymunk_reference() -> float:
     for _ in range(REFERENCE_STEPS):
         space.step(0.005)
     return REFERENCE_STEPS / (time.process_time() - t0)
+
+
+def _spin(n: int) -> int:
+    """A fixed pure-Python workload (the kind of work an env step is)."""
+    s = 0
+    for i in range(n):
+        s += i * i % 7
+    return s
+
+
+SPIN_STEPS = 2_000_000
+
+
+def two_process_scaling(rounds: int = 3) -> float:
+    """The machine's own scaling now: 2 x one process's wall time over two at once.
+
+    A fixed pure-Python workload, run alone and then in two forked processes
+    side by side, in turn, ``rounds`` times; the median pair's ratio. 2.0 on
+    two idle cores; two cores a hypervisor shares give less, and no vector
+    env can scale better than this.
+    """
+    ctx = multiprocessing.get_context("fork")
+    ratios = []
+    for _ in range(rounds):
+        t0 = time.perf_counter()
+        _spin(SPIN_STEPS)
+        one = time.perf_counter() - t0
+        workers = [ctx.Process(target=_spin, args=(SPIN_STEPS,)) for _ in range(2)]
+        t0 = time.perf_counter()
+        for w in workers:
+            w.start()
+        for w in workers:
+            w.join()
+        ratios.append(2.0 * one / (time.perf_counter() - t0))
+    return float(statistics.median(ratios))

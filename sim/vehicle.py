@@ -46,6 +46,9 @@ from conesim.sim.vehicle_params import VehicleParams
 #: pymunk collision type of the car's footprint.
 VEHICLE_COLLISION_TYPE = 1
 
+# (x, y, yaw, vx, vy, yaw_rate, ax, ay, yaw_accel): ``VehicleState``'s motion as floats.
+Kinematics = tuple[float, float, float, float, float, float, float, float, float]
+
 
 @dataclass(frozen=True, slots=True)
 class VehicleState:
@@ -245,12 +248,19 @@ class Vehicle:
         self._ax_force = wrench.fx / self.params.mass
         self._pre = (vwx, vwy, r, yaw, dt)
 
-    def post_step(self) -> None:
-        """Record the accelerations of the step just taken by ``space.step``."""
+    def post_step(self) -> Kinematics:
+        """Record the accelerations of the step just taken by ``space.step``.
+
+        Returns:
+            :meth:`kinematics` after the step, from the same reads of the body
+            (the world reads them every physics step).
+        """
         if self._pre is None:
             raise RuntimeError("post_step() needs a pre_step(dt) before space.step(dt)")
         vwx0, vwy0, r0, yaw0, dt = self._pre
-        vwx, vwy = self._body.velocity
+        b = self._body
+        vwx, vwy = b.velocity
+        r = b.angular_velocity
         dvx, dvy = (vwx - vwx0) / dt, (vwy - vwy0) / dt
         # Mean body-frame acceleration over the step: the body turned by r0 * dt
         # during it, so the world-frame velocity change is seen from the
@@ -260,11 +270,13 @@ class Vehicle:
         self._accel = (
             c * dvx + s * dvy,
             -s * dvx + c * dvy,
-            (self._body.angular_velocity - r0) / dt,
+            (r - r0) / dt,
         )
         self._pre = None
+        x, y = b.position
+        return self._motion(x, y, b.angle, velocity=(vwx, vwy, r))
 
-    def kinematics(self) -> tuple[float, float, float, float, float, float, float, float, float]:
+    def kinematics(self) -> Kinematics:
         """The state's motion now as plain floats, without building a ``VehicleState``.
 
         Returns:
@@ -273,10 +285,17 @@ class Vehicle:
             them every physics step and builds the state only when asked).
         """
         b = self._body
-        yaw = b.angle
-        vwx, vwy = b.velocity
-        c, s = math.cos(yaw), math.sin(yaw)
         x, y = b.position
+        vwx, vwy = b.velocity
+        return self._motion(x, y, b.angle, velocity=(vwx, vwy, b.angular_velocity))
+
+    def _motion(
+        self, x: float, y: float, yaw: float, *, velocity: tuple[float, float, float]
+    ) -> Kinematics:
+        """:meth:`kinematics` from the body's position, angle and its world-frame
+        velocity and angular velocity (vx, vy, r)."""
+        vwx, vwy, r = velocity
+        c, s = math.cos(yaw), math.sin(yaw)
         ax, ay, yaw_accel = self._accel
         return (
             x,
@@ -284,7 +303,7 @@ class Vehicle:
             (yaw + math.pi) % (2.0 * math.pi) - math.pi,
             c * vwx + s * vwy,
             -s * vwx + c * vwy,
-            b.angular_velocity,
+            r,
             ax,
             ay,
             yaw_accel,

@@ -44,7 +44,7 @@ from conesim.sim.events import (
 from conesim.sim.race_control import RaceControl, RaceRules, RaceState, timed_lap_length
 from conesim.sim.sensors import SensorProfile, SensorSuite, TruthSample, get_profile
 from conesim.sim.sensors.cone_map import ConeMap
-from conesim.sim.vehicle import Vehicle, VehicleState
+from conesim.sim.vehicle import Kinematics, Vehicle, VehicleState
 from conesim.sim.vehicle_params import VehicleParams
 from conesim.tracks import Track
 
@@ -207,15 +207,18 @@ class World:
         """The antenna's true pose after the last step (``state.antenna_pose()``, once per step)."""
         return self._antenna_pose
 
-    def _refresh(self) -> None:
+    def _refresh(self, kin: Kinematics | None = None) -> None:
         """Read the car after a step: its motion as floats, the CG and antenna poses.
 
         The same values and operations as ``VehicleState.pose`` and
         ``VehicleState.antenna_pose()``; the ``VehicleState`` itself is built
         only when :attr:`state` is read.
+
+        Args:
+            kin: the car's ``kinematics()`` if already read (``post_step``'s).
         """
         vehicle = self.vehicle
-        kin = self._kin = vehicle.kinematics()
+        kin = self._kin = vehicle.kinematics() if kin is None else kin
         self._steer = vehicle.steer
         self._state = None
         x, y, yaw = kin[0], kin[1], kin[2]
@@ -246,11 +249,11 @@ class World:
         vehicle = self.vehicle
         vehicle.pre_step(dt)
         self.space.step(dt)
-        vehicle.post_step()
+        moved = vehicle.post_step()
         self.steps += 1
         t = self.steps * dt  # no accumulated round-off: t is exact in steps
         new_down = cones.update(t)
-        self._refresh()
+        self._refresh(moved)
         kin = self._kin
         self.race.update_xy(self.time, t, prev_xy, (kin[0], kin[1], kin[2]))
         self.time = t

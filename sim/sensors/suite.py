@@ -98,6 +98,10 @@ class SensorSuite:
         self._clocks = [CaptureClock(s.config.rate, s.config.phase) for s in self._sensors]
         self._queues: list[deque[tuple[float, float, Message]]] = [deque() for _ in self._sensors]
         self._ranks = [DELIVERY_RANK[s.name] for s in self._sensors]
+        # What ``step`` walks at every step that captures or delivers, zipped once.
+        self._slots = tuple(
+            zip(self._sensors, self._clocks, self._queues, self._ranks, strict=True)
+        )
         self._last_t: float | None = None
         self._plan()
         self.seed = seed
@@ -153,7 +157,8 @@ class SensorSuite:
         if t < self._next_capture and self._next_delivery > deliver_by:
             return []  # no clock is due and no queued message is
         next_capture = math.inf
-        for sensor, clock, queue in zip(self._sensors, self._clocks, self._queues, strict=True):
+        slots = self._slots
+        for sensor, clock, queue, _ in slots:
             # ``due`` is False, with no side effect, below the threshold.
             if t >= clock.threshold and clock.due(t) and sensor.config.enabled:
                 message = sensor.capture(truth)
@@ -162,12 +167,12 @@ class SensorSuite:
             next_capture = min(next_capture, clock.threshold)
         out: list[tuple[float, int, Message]] = []
         next_delivery = math.inf
-        for rank, queue in zip(self._ranks, self._queues, strict=True):
+        for _, _, queue, rank in slots:
             while queue and queue[0][0] <= deliver_by:
                 _, stamp, message = queue.popleft()
                 out.append((stamp, rank, message))
-            if queue:
-                next_delivery = min(next_delivery, queue[0][0])
+            if queue and queue[0][0] < next_delivery:
+                next_delivery = queue[0][0]
         self._next_capture, self._next_delivery = next_capture, next_delivery
         if not out:
             return []
