@@ -63,6 +63,10 @@ def _delivery_order(item: tuple[float, int, Message]) -> tuple[float, int]:
     return item[0], item[1]
 
 
+# One sensor's clock, queue of pending deliveries and delivery rank.
+_Slot = tuple[Sensor, CaptureClock, deque[tuple[float, float, Message]], int]
+
+
 class SensorSuite:
     """All sensors of one car, with their clocks and delivery queues.
 
@@ -99,7 +103,7 @@ class SensorSuite:
         self._queues: list[deque[tuple[float, float, Message]]] = [deque() for _ in self._sensors]
         self._ranks = [DELIVERY_RANK[s.name] for s in self._sensors]
         # What ``step`` walks at every step that captures or delivers, zipped once.
-        self._slots = tuple(
+        self._slots: tuple[_Slot, ...] = tuple(
             zip(self._sensors, self._clocks, self._queues, self._ranks, strict=True)
         )
         self._last_t: float | None = None
