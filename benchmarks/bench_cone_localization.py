@@ -161,18 +161,23 @@ def drive_all(
     return args, results, before, pymunk_reference()
 
 
+def header(title: str, args: argparse.Namespace, width: int) -> None:
+    """The tracks run and the table's head, its first column ``width`` wide."""
+    last = args.first + args.generated - 1
+    print(
+        f"{title}: {len(shipped_tracks())} shipped tracks + generated "
+        f"{args.first}-{last} (medium), 2 laps, seed 0, {args.jobs} workers"
+    )
+    print(f"  {'configuration':{width}s} pos RMSE [m]   yaw [deg]    clean    RTF    not clean")
+    print(f"  {'':{width}s} rms    worst   rms   worst")
+
+
 def main() -> None:
     """Print the figures."""
     args, results, before, after = drive_all(
         __doc__, CONFIGS, one_run, generated=6, first=3000, jobs=2
     )
-    last = args.first + args.generated - 1
-    print(
-        f"cone-map localization: {len(shipped_tracks())} shipped tracks + generated "
-        f"{args.first}-{last} (medium), 2 laps, seed 0, {args.jobs} workers"
-    )
-    print(f"  {'configuration':22s} pos RMSE [m]   yaw [deg]    clean    RTF    not clean")
-    print(f"  {'':22s} rms    worst   rms   worst")
+    header("cone-map localization", args, 22)
     rtf = {c: report(c, [r for r in results if r.config == c]) for c in CONFIGS}
     for c in CONFIGS:
         counts(c, [r for r in results if r.config == c])

@@ -36,12 +36,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from bench_cone_localization import counts, drive_all, report
+from bench_cone_localization import counts, drive_all, header, report
 
 from conesim.envs.runner import RunResult, run_scenario
 from conesim.envs.scenario import Scenario
 from conesim.sim.sensors import get_profile
-from conesim.tracks import GeneratedTrack, shipped_tracks
+from conesim.tracks import GeneratedTrack
 
 CONFIGS = {
     "consumer fused": ("consumer", "fused"),
@@ -131,13 +131,7 @@ def main() -> None:
     args, results, before, after = drive_all(
         __doc__, CONFIGS, one_run, generated=16, first=6000, jobs=1
     )
-    last = args.first + args.generated - 1
-    print(
-        f"slam localization: {len(shipped_tracks())} shipped tracks + generated "
-        f"{args.first}-{last} (medium), 2 laps, seed 0, {args.jobs} workers"
-    )
-    print(f"  {'configuration':16s} pos RMSE [m]   yaw [deg]    clean    RTF    not clean")
-    print(f"  {'':16s} rms    worst   rms   worst")
+    header("slam localization", args, 16)
     rtf = {c: report(c, [r for r in results if r.config == c]) for c in CONFIGS}  # type: ignore[misc]
     for c in CONFIGS:
         rows = [r for r in results if r.config == c]
