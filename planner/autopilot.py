@@ -67,7 +67,9 @@ from conesim.localization.frames import (
     TransformError,
     TransformStamped,
 )
+from conesim.planner.bridges import TrackEstimate
 from conesim.planner.classify import ClassifiedCones, classify_cones_by_side
+from conesim.planner.cone_memory import ConeMemory
 from conesim.planner.config import AutopilotConfig
 from conesim.planner.geometry import FloatArray, PathProjector, arc_length
 from conesim.planner.global_fit import smoothed_global_path
@@ -193,6 +195,7 @@ class Autopilot:
             else None
         )
         self.speed_controller = SpeedController(self.config.speed_control)
+        self.memory = ConeMemory(self.config.cone_memory)
         self.classified: ClassifiedCones | None = None
         self.plan: LocalPlan | None = None
         self.path_reference: FloatArray = np.zeros((0, 2))
@@ -245,6 +248,12 @@ class Autopilot:
         c = self.config
         try:
             try:
+                message = self.memory.recall(
+                    message, self.buffer, c.reference_frame, message.header.stamp
+                )
+            except ExtrapolationError:
+                message = self.memory.recall(message, self.buffer, c.reference_frame, LATEST)
+            try:
                 classified = classify_cones_by_side(
                     message, self.buffer, self.projector, c.classifier,
                     station_hint=self.station_hint, reference_frame=c.reference_frame,
@@ -268,6 +277,11 @@ class Autopilot:
                     None
                     if self.global_speed is None
                     else functools.partial(self._global_speeds, sensor_station=station)
+                ),
+                map_check=(
+                    None
+                    if math.isinf(c.lane_check_margin)
+                    else functools.partial(self.off_lane_reason, sensor_station=station)
                 ),
             )
             curvature = self._global_curvature(plan.path, station)
@@ -325,6 +339,39 @@ class Autopilot:
             v[0] = min(v[0], max(self.speed(), 0.0))
             return forward_pass(s, v, profile.a_drive)
         return speed_profile(path, profile, self.speed(), s=s, v_end=v_end)
+
+    def off_lane_reason(
+        self, path: FloatArray, stamp: float, track: TrackEstimate, *, sensor_station: float
+    ) -> str:
+        """Why the cone ``path`` (``os_sensor`` at ``stamp``) leaves the lane as the global
+        path places it, or "" (``AutopilotConfig.lane_check_margin``).
+
+        Each point's signed offset from the global path (searched from 5 m
+        behind the sensor's station to twice the path's length ahead), less the
+        middle's offset the cones in view give, may be at most half their
+        width plus the margin.
+        """
+        c = self.config
+        try:
+            points = self.buffer.transform_points(c.reference_frame, c.sensor_frame, path, stamp)
+        except TransformError:
+            return ""  # nothing to check against: the cones alone decide
+        # The path's points lie at most twice its length ahead along the global
+        # path (a path on the inside of a hairpin of R 3 m about a centre of
+        # 4 m runs 0.75 m per metre of it); a window that is wide errs on the
+        # side of passing the path (a nearer segment), one that ends short
+        # would measure the points beyond it to its end.
+        ahead = 2.0 * float(arc_length(path)[-1]) + max(float(path[0, 0]), 0.0) + 5.0
+        window = (sensor_station - 5.0, sensor_station + ahead)
+        lateral = self.projector.project(points, window=window).lateral - track.centre
+        worst = float(np.max(np.abs(lateral)))
+        allowed = 0.5 * track.width + c.lane_check_margin
+        if worst <= allowed:
+            return ""
+        return (
+            f"path leaves the lane on the map ({worst:.2f} m from its middle, "
+            f"allowed {allowed:.2f} m)"
+        )
 
     def _end_on_map(self, path: FloatArray, sensor_station: float) -> bool:
         """Whether the path's end, placed in ``reference`` by the latest pose, lies

@@ -184,7 +184,12 @@ class MidlineConfig(Settings):
             body (``planner.lane``); False keeps the midline.
         lane_iterations: sweeps of the elastic band that then moves it,
             within that room, towards the least curvature
-            (``kernels.lane_path``).
+            (``kernels.lane_path``). Each Gauss-Seidel sweep carries a
+            point's move about two points (1 m) along the path: 20 sweeps
+            smoothed a hairpin's apex but not its entry, and the car, at full
+            lock, ran wide at the exits of hairpins of about 4 m lane-centre
+            radius; 150 sweeps reach across the 15-30 m in view and take the
+            entry wide (``benchmarks/bench_driving.py``, tuning seeds).
         body_half_width: half the car's width [m] (``VehicleParams.width`` 1.4 m).
         body_front: the car's front end ahead of the rear axle [m]
             (wheelbase 1.53 m plus the 0.75 m front overhang), which sweeps
@@ -226,7 +231,7 @@ class MidlineConfig(Settings):
     min_path_length: float = 4.0  # [m]
     doubled_cone_distance: float = 1.0  # [m]
     keep_in_lane: bool = True
-    lane_iterations: int = 20
+    lane_iterations: int = 150
     body_half_width: float = 0.7  # [m]
     body_front: float = 2.28  # [m]
     lane_clearance: float = 0.25  # [m]
@@ -500,6 +505,9 @@ class SpeedControlConfig(Settings):
         full_lock_share: while pure pursuit steers at least this share of
             ``max_steer``, the car does not accelerate [-]: at full lock it
             turns no tighter, and faster it runs wide (out of a 3 m hairpin).
+            At 0.95 the car accelerated out of hairpins of about 4 m radius
+            while still near lock and ran wide at the exit; 0.8 waits until
+            the steering unwinds (``benchmarks/bench_driving.py``, tuning seeds).
     """
 
     kp: float = 1.5  # [1/s]
@@ -517,7 +525,7 @@ class SpeedControlConfig(Settings):
     ellipse_floor: float = 0.3  # [-]
     preview_time: float = 0.3  # [s]
     preview_min: float = 1.0  # [m]
-    full_lock_share: float = 0.95  # [-]
+    full_lock_share: float = 0.8  # [-]
 
     def __post_init__(self) -> None:
         for name in (
@@ -538,6 +546,36 @@ class SpeedControlConfig(Settings):
 
 
 @dataclass(frozen=True)
+class ConeMemoryConfig(Settings):
+    """How the planner remembers cones between scans (``planner.cone_memory``).
+
+    Attributes:
+        keep_scans: a cone not seen in this many scans is forgotten (at 10 Hz,
+            5 scans: 0.5 s, 10 m at 20 m/s) [-]; 0 turns the memory off.
+        match_radius: a scan's cone within this of a remembered one is that
+            cone (FS cones stand at least 1.5 m apart across a 3 m lane and
+            up to 5 m along it; a knocked cone that slid farther is a new
+            one) [m].
+        min_sightings: sightings before a remembered cone is recalled into a
+            scan that lacks it, or its label overrides the scan's [-].
+    """
+
+    keep_scans: int = 5
+    match_radius: float = 0.5  # [m]
+    min_sightings: int = 2
+
+    def __post_init__(self) -> None:
+        _check("ConeMemoryConfig", "keep_scans", self.keep_scans, 0)
+        _check("ConeMemoryConfig", "match_radius", self.match_radius, 1e-9)
+        _check("ConeMemoryConfig", "min_sightings", self.min_sightings, 1)
+
+    @property
+    def enabled(self) -> bool:
+        """Whether scans are merged at all."""
+        return self.keep_scans > 0
+
+
+@dataclass(frozen=True)
 class AutopilotConfig(Settings):
     """The whole autopilot: its stages' settings and frame names (its rate is the loop's).
 
@@ -547,6 +585,7 @@ class AutopilotConfig(Settings):
         speed_profile: speed limits along the path.
         pure_pursuit: steering.
         speed_control: longitudinal control.
+        cone_memory: the cones of the last scans added to each scan.
         global_speed: let the local speed profile end at the global path's
             speed at its last station (``planner.global_speed``) instead of
             standing still at the end of the seen path.
@@ -579,6 +618,16 @@ class AutopilotConfig(Settings):
             in ``reference`` by the pose, lies within this distance of the
             global path [m]: where the map and the cones disagree by more
             (a poor pose), the car keeps to the cones.
+        lane_check_margin: a cone path that passed its own checks is still
+            not taken (the previous one is carried forward) where a point
+            of it lies farther than half the track's width in view plus
+            this from the lane's middle as the global path places it (the
+            global path shifted by the cones' own estimate of the middle,
+            ``TrackEstimate.centre``, which takes up a survey's bias and a
+            drifting pose alike) [m]; inf: no such check. With 30 % of the
+            cones missed the Delaunay midline sometimes ran out through a
+            missing cone's gap, where no boundary edge is left to cross
+            (``benchmarks/bench_driving.py``, tuning seeds).
         global_path_min_scatter: a global path whose points scatter more
             than this about a smooth curve is smoothed before use
             (``planner.global_fit``: a surveyed path's error would read as
@@ -594,10 +643,12 @@ class AutopilotConfig(Settings):
     speed_profile: SpeedProfileConfig = field(default_factory=SpeedProfileConfig)
     pure_pursuit: PurePursuitConfig = field(default_factory=PurePursuitConfig)
     speed_control: SpeedControlConfig = field(default_factory=SpeedControlConfig)
+    cone_memory: ConeMemoryConfig = field(default_factory=ConeMemoryConfig)
     global_speed: bool = True
     speed_source: str = "global"
     pursue_global_beyond_path: bool = True
     pursue_global_max_gap: float = 1.0  # [m] raw pose (150 ms late): gaps up to 0.7 m
+    lane_check_margin: float = 0.0  # [m]
     global_path_min_scatter: float = 0.05  # [m] exact paths: 0.01-0.02 m
     speed_window: float = 0.1  # [s]
     reference_frame: str = FRAME_REFERENCE
@@ -629,6 +680,7 @@ class AutopilotConfig(Settings):
         _check("AutopilotConfig", "speed_window", self.speed_window, 1e-9)
         _check("AutopilotConfig", "global_path_min_scatter", self.global_path_min_scatter, 0.0)
         _check("AutopilotConfig", "pursue_global_max_gap", self.pursue_global_max_gap, 0.0)
+        _check("AutopilotConfig", "lane_check_margin", self.lane_check_margin, -math.inf)
         if self.speed_source not in ("local", "global"):
             raise ValueError(
                 f"AutopilotConfig.speed_source = {self.speed_source!r}: allowed 'local', 'global'"

@@ -18,7 +18,10 @@ The ROS pipeline's node, step by step (each step named as a function):
 5. ``fit_path`` (``spline``): B-spline through them, resampled every 0.5 m;
    ``keep_in_lane`` (``lane``): moved into the lane less the car's body.
 6. ``check_path``: at least two midpoints, at least ``min_path_length`` long,
-   starting within ``max_start_distance``, and crossing no boundary edge.
+   starting within ``max_start_distance``, and crossing no boundary edge;
+   6b. with a ``map_check`` (the autopilot's: ``Autopilot.off_lane_reason``),
+   not leaving the lane as the global path places it, where a missed cone
+   left no edge to cross.
 7. ``speed_profile``: the waypoint speeds.
 
 When step 6 fails, ``carry_path_forward`` moves the previous plan's path into
@@ -67,6 +70,10 @@ from conesim.planner.spline import fit_path
 
 SpeedFn = Callable[[FloatArray, "FloatArray | None"], FloatArray]
 """``speeds(path, s)``: the waypoints' speeds for a path and its arc length (or None)."""
+
+MapCheck = Callable[[FloatArray, float, TrackEstimate], str]
+"""``map_check(path, stamp, track)``: why a sound path still leaves the lane the global
+path and the cones in view agree on, or "" (step 6b)."""
 
 _DEFAULT_CONFIG = MidlineConfig()  # frozen: built once
 _DEFAULT_SPEED = SpeedProfileConfig()
@@ -388,6 +395,7 @@ def reference_path_planning(
     time: float = LATEST,
     sensor_frame: str = FRAME_OS_SENSOR,
     speeds: SpeedFn | None = None,
+    map_check: MapCheck | None = None,
 ) -> LocalPlan:
     """Plan the local path between the classified cones, in ``sensor_frame``.
 
@@ -405,6 +413,8 @@ def reference_path_planning(
             by default the speed profile of ``speed_config`` from ``v_start``.
             The autopilot passes its global-path speeds here, so that no
             profile is computed only to be replaced.
+        map_check: step 6b, called on a path step 6 passed with the stamp
+            used and the track in view; a reason it returns fails the path.
 
     Returns:
         The plan with every intermediate.
@@ -429,6 +439,8 @@ def reference_path_planning(
     reason = check_path(
         path, len(midpoints), boundary, config, length, crosses=crosses, start=start
     )
+    if not reason and map_check is not None:
+        reason = map_check(path, stamp, track)
     status = PlanStatus.OK
     if reason:
         carried = carry_path_forward(previous, buffer, stamp, cones.header.frame_id, sensor_frame)

@@ -22,6 +22,8 @@ from conesim.core.messages import ConeDetections, Header, Message, WheelSpeed
 from conesim.core.pose import Pose2D
 from conesim.localization.frames import Buffer
 from conesim.planner import Autopilot, AutopilotConfig, ControlCommand, PlanStatus
+from conesim.planner.bridges import TrackEstimate
+from conesim.planner.config import ConeMemoryConfig
 
 AXLE_TO_ANTENNA = 0.465  # [m] PurePursuitConfig.rear_axle_x = -0.465 in os_sensor
 WHEELBASE = 1.53  # [m]
@@ -446,3 +448,52 @@ def test_speeds_brake_to_a_stop_within_a_path_that_leaves_the_map(
     v_on = autopilot._global_speeds(on_map, x - x[0], sensor_station=10.0)
     v_end = autopilot.global_speed.speed_at(10.0 + 20.0)
     assert v_on[-1] == pytest.approx(v_end, rel=1e-9) and v_end > 20.0
+
+
+def test_a_path_off_the_lane_on_the_map_is_refused(synth: ModuleType, straight) -> None:
+    """``off_lane_reason`` on a straight global path along x (sensor at the origin,
+    heading +x), a 3 m lane measured 0.2 m left of it: a path 1.65 m left of
+    the global path lies 1.45 m from the lane's middle, inside half the width
+    (1.5 m); at 1.75 m, 1.55 m: refused, unless the margin allows 0.1 m more."""
+    scene = synth.make_scene(straight, Pose2D(0.0, 0.0, 0.0))
+    track = TrackEstimate(width=3.0, centre=0.2, measured=True)
+    x = np.arange(0.0, 10.01, 0.5)
+    for margin, y, refused in ((0.0, 1.65, False), (0.0, 1.75, True), (0.1, 1.75, False)):
+        autopilot = Autopilot(
+            scene.buffer, straight.global_path, AutopilotConfig(lane_check_margin=margin)
+        )
+        path = np.column_stack([x, np.where(x > 6.0, y, 0.0)])
+        reason = autopilot.off_lane_reason(path, scene.stamp, track, sensor_station=10.0)
+        assert bool(reason) is refused, (margin, y, reason)
+        if refused:
+            assert "1.55 m from its middle, allowed 1.50 m" in reason
+
+
+def test_an_off_lane_plan_falls_back_to_the_previous_path(synth: ModuleType, straight) -> None:
+    """A sound plan, then the same scene with a lane check that refuses every
+    path (a margin of -10 m): the second plan carries the first one forward,
+    with the check's reason."""
+    scene = synth.make_scene(straight, Pose2D(0.0, 0.0, 0.0))
+    autopilot = Autopilot(scene.buffer, straight.global_path, AutopilotConfig())
+    assert autopilot.on_detections(scene.detections).status is PlanStatus.OK
+    strict = Autopilot(scene.buffer, straight.global_path, AutopilotConfig(lane_check_margin=-10.0))
+    strict.plan = autopilot.plan
+    plan = strict.on_detections(scene.detections)
+    assert plan.status is PlanStatus.FALLBACK
+    assert "leaves the lane on the map" in plan.reason
+
+
+def test_cones_missed_in_a_scan_are_planned_from_memory(synth: ModuleType, straight) -> None:
+    """The same scene twice, then with every other cone missed: with the memory
+    the third plan has all the cones of the first; without, half."""
+    scene = synth.make_scene(straight, Pose2D(0.0, 0.0, 0.0))
+    full = scene.detections
+    half = ConeDetections(full.header, full.points[::2], full.colours)
+    for keep, expected in ((5, len(full)), (0, len(half))):
+        config = AutopilotConfig(cone_memory=ConeMemoryConfig(keep_scans=keep))
+        autopilot = Autopilot(scene.buffer, straight.global_path, config)
+        autopilot.on_detections(full)
+        autopilot.on_detections(full)
+        autopilot.on_detections(half)
+        assert autopilot.classified is not None
+        assert len(autopilot.classified.points) == expected
