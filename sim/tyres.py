@@ -10,7 +10,7 @@ The car model runs them at every physics step, inside one compiled pass of
 ``sim.vehicle_dynamics``; so each is a numba kernel on floats (``_slip_angles``
 and so on), and the functions of this module call them. No ``fastmath``: the
 kernels' numbers are Python's, bit for bit (``math``'s functions are the C
-library's in both; ``py_min``/``py_max`` are Python's ``min``/``max``).
+library's in both; ``kernel_math.py_min``/``py_max`` are Python's ``min``/``max``).
 
 Slip angles (single track, body frame x forward / y left, CG at the origin)::
 
@@ -57,6 +57,7 @@ import math
 from dataclasses import dataclass
 
 from conesim.core.compiled import cached_njit
+from conesim.sim.kernel_math import py_max, py_min
 
 #: Smallest longitudinal wheel speed used in the slip angle [m/s]; keeps
 #: atan(w/u) finite when the car slides exactly sideways.
@@ -110,18 +111,6 @@ def _probe() -> None:
 
 
 _compiled = cached_njit(_probe, "conesim.sim.tyres")
-
-
-@_compiled
-def py_min(a, b):
-    """Python's ``min(a, b)``: ``b`` only when it is smaller (ties and NaN keep ``a``)."""
-    return b if b < a else a
-
-
-@_compiled
-def py_max(a, b):
-    """Python's ``max(a, b)``: ``b`` only when it is larger (ties and NaN keep ``a``)."""
-    return b if b > a else a
 
 
 def slip_angles(

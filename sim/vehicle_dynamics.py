@@ -73,7 +73,7 @@ is a numba kernel on floats (``_axle_loads`` and so on, the tyres'
 from ``sim.tyres``), the parameters packed once into an array
 (:func:`packed`), and the functions of this module call them. No
 ``fastmath``, ``math``'s C functions, Python's ``min``/``max``
-(``tyres.py_min``/``py_max``): the numbers are Python's bit for bit. The
+(``sim.kernel_math``): the numbers are Python's bit for bit. The
 one step left to Python is ``math.hypot`` (the blend's speed, the kinematic
 force's friction cap), whose CPython algorithm numba's differs from in the
 last bit.
@@ -89,13 +89,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from conesim.core.compiled import cached_njit
-from conesim.sim.tyres import (
-    _friction_ellipse,
-    _lateral_force,
-    _slip_angles,
-    py_max,
-    py_min,
-)
+from conesim.sim.kernel_math import py_max, py_min
+from conesim.sim.tyres import _friction_ellipse, _lateral_force, _slip_angles
 from conesim.sim.vehicle_params import VehicleParams
 
 #: Speed floor for the power limit P / v [m/s].
