@@ -125,14 +125,18 @@ class SteeringActuator:
     def __init__(self, params: VehicleParams) -> None:
         self._p = params
         self.angle = 0.0  # [rad]
+        self._step: tuple[float, float, float] = (math.nan, 0.0, 0.0)  # (dt, gain, max change)
 
     def update(self, command: float, dt: float) -> float:
         """Advance by dt [s] towards command [rad]; return the new angle [rad]."""
         p = self._p
-        tau = p.steer_time_constant
-        gain = 1.0 - math.exp(-dt / tau) if tau > 0.0 else 1.0
+        step_dt, gain, max_change = self._step
+        if dt != step_dt:  # the same dt every physics step: the gain is worked out once
+            tau = p.steer_time_constant
+            gain = 1.0 - math.exp(-dt / tau) if tau > 0.0 else 1.0
+            max_change = p.max_steer_rate * dt
+            self._step = (dt, gain, max_change)
         change = (command - self.angle) * gain
-        max_change = p.max_steer_rate * dt
         change = min(max(change, -max_change), max_change)
         self.angle = min(max(self.angle + change, -p.max_steer), p.max_steer)
         return self.angle
