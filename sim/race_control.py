@@ -44,9 +44,17 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from conesim.core.compiled import cached_njit
 from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
 from conesim.sim.progress import PolylineProgress, segment_crossing, segment_crossing_xy
+
+
+def _probe() -> None:
+    """Nothing: what ``cached_njit`` asks numba to cache, from this file's directory."""
+
+
+_compiled = cached_njit(_probe, "conesim.sim.race_control")
 
 # [m] far above any round-off of the per-step tests, far below any footprint
 # or step: the quick rejections of ``_off`` and ``_crossed`` keep this much
@@ -159,7 +167,7 @@ class RaceControl:
         )
         self.lap_length = float(lap_length)
         hl, hw = 0.5 * car_length, 0.5 * car_width
-        self._corners_list = [(hl, hw), (hl, -hw), (-hl, hw), (-hl, -hw)]
+        self._half_footprint = (hl, hw)  # [m] the corners are (+-hl, +-hw)
         self._half_widths_list = [float(h) for h in self.half_widths]
         # Plain-float end points for the per-step crossing test.
         lx = [float(v) for v in self.line.ravel()]
@@ -264,14 +272,8 @@ class RaceControl:
         half = halves[min(index, len(halves) - 1)]
         if abs(lateral) + self._corner_reach < half:
             return False  # every corner within a corner's reach of the CG, inside
-        c, sn = math.cos(yaw), math.sin(yaw)
-        nx, ny = -ty, tx
-        above = below = 0
-        for cx, cy in self._corners_list:
-            lat = lateral + (c * cx - sn * cy) * nx + (sn * cx + c * cy) * ny
-            above += lat > half
-            below += lat < -half
-        return above == 4 or below == 4
+        hl, hw = self._half_footprint
+        return bool(_corners_off(lateral, tx, ty, yaw, half, hl, hw))
 
     def _advance_progress(self, s: float, cut: bool = False) -> None:
         """Add the change of station to ``s`` [m] (the short way round a loop);
@@ -331,6 +333,22 @@ class RaceControl:
             history.popleft()
         t0, p0 = history[0]
         st.stuck = t0 <= horizon and abs(progress - p0) < self.rules.stuck_progress_m
+
+
+@_compiled
+def _corners_off(lateral, tx, ty, yaw, half, hl, hw):  # noqa: PLR0917
+    """Whether the four corners (+-hl, +-hw) of a footprint whose CG is
+    ``lateral`` off the centreline with tangent (tx, ty), heading ``yaw``, all
+    lie beyond the same boundary at ``half``: ``RaceControl._off``'s placing,
+    compiled (in the corners' order; the same operations as in Python)."""
+    c, sn = math.cos(yaw), math.sin(yaw)
+    nx, ny = -ty, tx
+    above = below = 0
+    for cx, cy in ((hl, hw), (hl, -hw), (-hl, hw), (-hl, -hw)):
+        lat = lateral + (c * cx - sn * cy) * nx + (sn * cx + c * cy) * ny
+        above += lat > half
+        below += lat < -half
+    return above == 4 or below == 4
 
 
 def _grown_box(line: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
