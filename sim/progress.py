@@ -72,6 +72,9 @@ class PolylineProgress:
         self._segments = np.column_stack([self._starts, self._tangents, self._lengths])
         self._segments.setflags(write=False)
         self._s0_array = np.ascontiguousarray(self._s0, dtype=float)
+        # The walk's kernels compile (or load) now, not in the first step (a pure call).
+        sx, sy = self._starts_list[0]
+        _walked(self._segments, self._s0_array, sx, sy, 0, self.closed)
         self._last: int | None = None
 
     def reset(self) -> None:

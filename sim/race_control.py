@@ -168,6 +168,7 @@ class RaceControl:
         self.lap_length = float(lap_length)
         hl, hw = 0.5 * car_length, 0.5 * car_width
         self._half_footprint = (hl, hw)  # [m] the corners are (+-hl, +-hw)
+        _corners_off(0.0, 1.0, 0.0, 0.0, 1.0, hl, hw)  # compiled (or loaded) now, not in a step
         self._half_widths_list = [float(h) for h in self.half_widths]
         # Plain-float end points for the per-step crossing test.
         lx = [float(v) for v in self.line.ravel()]

@@ -178,6 +178,9 @@ class Vehicle:
         space.add(self._body, self._shape)
         self._steering = SteeringActuator(params)
         self.reset(pose, speed)
+        # The model's kernels compile (or load from the cache) here, while the
+        # world is built, rather than in its first step (a pure call).
+        wrench(self._packed, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1e-3, 0.0)
 
     @property
     def body(self) -> pymunk.Body:
