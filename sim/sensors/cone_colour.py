@@ -78,7 +78,10 @@ def sample_colours(
     for c, big, seen, draw in zip(
         true_class.tolist(), is_big.tolist(), coloured.tolist(), u.tolist(), strict=True
     ):
-        k = min(sum(draw >= edge for edge in rows[c]), UNKNOWN) if seen else UNKNOWN
+        k = UNKNOWN
+        if seen:
+            e0, e1, e2, e3 = rows[c]  # the four classes' cumulative edges
+            k = min(int(draw >= e0) + (draw >= e1) + (draw >= e2) + (draw >= e3), UNKNOWN)
         big_label = report_big_orange and big and k == ORANGE
         labels.append("big_orange" if big_label else COLOUR_CLASSES[k])
     return tuple(labels)
