@@ -393,11 +393,14 @@ class ClosedLoop:
         for _ in range(self.substeps):
             tick = world.step()  # 1. physics, race control, sensors
             sent = localizer.step(tick.t, tick.messages, world.antenna_pose)  # 2. frame tree
-            deliveries += [Delivery(tick.t, m) for m in tick.messages]
-            local_xy += [Delivery(tick.t, p) for p in sent.local_xy]
+            if tick.messages:  # most physics steps deliver nothing
+                deliveries += [Delivery(tick.t, m) for m in tick.messages]
+                if sent.local_xy:
+                    local_xy += [Delivery(tick.t, p) for p in sent.local_xy]
             if sent.transform is not None:
                 broadcasts.append(Broadcast(sent.transform, world.antenna_pose))
-            events += tick.events
+            if tick.events:
+                events += tick.events
         messages = [d.message for d in deliveries]
         self.record = self._finish(
             tuple(deliveries), tuple(local_xy), tuple(broadcasts), events, messages

@@ -115,7 +115,7 @@ class Localizer:
             messages: the measurements delivered now, in stamp order.
             truth: the antenna's true pose now (published in ``truth`` mode only).
         """
-        points = self.handle(messages)
+        points = self.handle(messages) if messages else []  # most ticks deliver nothing
         return LocalizationStep(points, self.broadcaster.step(t, truth))
 
     def handle(self, messages: list[Message]) -> list[PointStamped]:

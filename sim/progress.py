@@ -6,6 +6,10 @@ scalar steps per physics step, since the car moves centimetres). A
 figure-of-eight (skidpad) or a hairpin whose legs lie close together therefore
 never makes the car jump to the other leg. The first query (or one after a
 reset) searches globally with a ``cKDTree`` and then a window of segments.
+
+The walk runs at every physics step (race control), so it is a numba kernel
+on floats (no ``fastmath``, Python's ``min``/``max``: Python's numbers, bit
+for bit; ``tests/sim/test_step_fast_paths.py`` compares it with ``project``).
 """
 
 from __future__ import annotations
@@ -16,8 +20,17 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from conesim.core.compiled import cached_njit
 from conesim.core.polyline import Polyline
 from conesim.core.projection import Projection
+from conesim.sim.kernel_math import py_max, py_min
+
+
+def _probe() -> None:
+    """Nothing: what ``cached_njit`` asks numba to cache, from this file's directory."""
+
+
+_compiled = cached_njit(_probe, "conesim.sim.progress")
 
 
 class PolylineProgress:
@@ -55,12 +68,13 @@ class PolylineProgress:
         self._tangents_list = [(float(a), float(b)) for a, b in self._tangents]
         self._lengths_list = [float(v) for v in self._lengths]
         self._s0_list = [float(v) for v in self._s0]
-        self._segments = [
-            (sx, sy, tx, ty, length)
-            for (sx, sy), (tx, ty), length in zip(
-                self._starts_list, self._tangents_list, self._lengths_list, strict=True
-            )
-        ]
+        # (start x, start y, tangent x, tangent y, length) of each segment, for the walk.
+        self._segments = np.column_stack([self._starts, self._tangents, self._lengths])
+        self._segments.setflags(write=False)
+        self._s0_array = np.ascontiguousarray(self._s0, dtype=float)
+        # The walk's kernels compile (or load) now, not in the first step (a pure call).
+        sx, sy = self._starts_list[0]
+        _walked(self._segments, self._s0_array, sx, sy, 0, self.closed)
         self._last: int | None = None
 
     def reset(self) -> None:
@@ -134,44 +148,68 @@ class PolylineProgress:
         meaning, on plain floats).
         """
         i = self._last
-        i, d2, u, offset = self._search(px, py) if i is None else self._walk(px, py, i)
+        if i is not None:
+            s, lateral, i, tx, ty = _walked(self._segments, self._s0_array, px, py, i, self.closed)
+            self._last = i
+            return s, lateral, i, tx, ty
+        i, d2, u, offset = self._search(px, py)
         self._last = i
         tx, ty = self._tangents_list[i]
         return self._s0_list[i] + u, _offset(offset, d2, u, self._lengths_list[i]), i, tx, ty
 
     def _walk(self, px: float, py: float, i: int) -> tuple[int, float, float, float]:
         """From segment i on to each neighbour while it is nearer: (segment,
-        distance^2, the foot's arc position u, perpendicular offset).
-
-        Plain floats, the segment's foot written out: it runs every physics step.
-        """
-        segments = self._segments
-        n = len(segments)
-        closed = self.closed
-        sx, sy, tx, ty, length = segments[i]
-        rx, ry = px - sx, py - sy
-        u = min(max(rx * tx + ry * ty, 0.0), length)
-        fx, fy = rx - tx * u, ry - ty * u
-        best_d2, best_u, best_lat = fx * fx + fy * fy, u, tx * fy - ty * fx
-        for di in (1, -1):
-            while True:
-                j = i + di
-                if closed:
-                    j %= n
-                elif not 0 <= j < n:
-                    break
-                sx, sy, tx, ty, length = segments[j]
-                rx, ry = px - sx, py - sy
-                u = min(max(rx * tx + ry * ty, 0.0), length)
-                fx, fy = rx - tx * u, ry - ty * u
-                d2 = fx * fx + fy * fy
-                if d2 >= best_d2:
-                    break
-                i, best_d2, best_u, best_lat = j, d2, u, tx * fy - ty * fx
-        return i, best_d2, best_u, best_lat
+        distance^2, the foot's arc position u, perpendicular offset)."""
+        j, d2, u, lateral = _walk(self._segments, px, py, i, self.closed)
+        return int(j), d2, u, lateral
 
 
-def _offset(lateral: float, d2: float, u: float, length: float) -> float:
+@_compiled
+def _walk(segments, px, py, i, closed):
+    """:meth:`PolylineProgress._walk` on the (n, 5) ``segments`` (start, unit
+    tangent, length), compiled: it runs every physics step."""
+    n = segments.shape[0]
+    sx, sy, tx, ty, length = (
+        segments[i, 0],
+        segments[i, 1],
+        segments[i, 2],
+        segments[i, 3],
+        segments[i, 4],
+    )
+    rx, ry = px - sx, py - sy
+    u = py_min(py_max(rx * tx + ry * ty, 0.0), length)
+    fx, fy = rx - tx * u, ry - ty * u
+    best_d2, best_u, best_lat = fx * fx + fy * fy, u, tx * fy - ty * fx
+    for di in (1, -1):
+        while True:
+            j = i + di
+            if closed:
+                j %= n
+            elif not 0 <= j < n:
+                break
+            sx, sy, tx, ty, length = (
+                segments[j, 0], segments[j, 1], segments[j, 2], segments[j, 3], segments[j, 4]
+            )  # fmt: skip
+            rx, ry = px - sx, py - sy
+            u = py_min(py_max(rx * tx + ry * ty, 0.0), length)
+            fx, fy = rx - tx * u, ry - ty * u
+            d2 = fx * fx + fy * fy
+            if d2 >= best_d2:
+                break
+            i, best_d2, best_u, best_lat = j, d2, u, tx * fy - ty * fx
+    return i, best_d2, best_u, best_lat
+
+
+@_compiled
+def _walked(segments, s0, px, py, i, closed):  # noqa: PLR0917
+    """:meth:`PolylineProgress.project_xy` after the walk from segment ``i``:
+    (s, lateral, segment, tangent x, tangent y), compiled."""
+    j, d2, u, lateral = _walk(segments, px, py, i, closed)
+    return s0[j] + u, _offset(lateral, d2, u, segments[j, 4]), j, segments[j, 2], segments[j, 3]
+
+
+@_compiled
+def _offset(lateral, d2, u, length):
     """The signed offset of a point from its foot at ``u`` on a segment of
     ``length`` [m]: ``lateral`` (perpendicular) with the foot inside the
     segment, else the distance sqrt(``d2``) to the end it lies at, with

@@ -44,9 +44,22 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from conesim.core.compiled import cached_njit
 from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
 from conesim.sim.progress import PolylineProgress, segment_crossing, segment_crossing_xy
+
+
+def _probe() -> None:
+    """Nothing: what ``cached_njit`` asks numba to cache, from this file's directory."""
+
+
+_compiled = cached_njit(_probe, "conesim.sim.race_control")
+
+# [m] far above any round-off of the per-step tests, far below any footprint
+# or step: the quick rejections of ``_off`` and ``_crossed`` keep this much
+# away from the cases they leave to the full test.
+_QUICK_MARGIN = 0.01
 
 
 @dataclass(frozen=True)
@@ -154,13 +167,21 @@ class RaceControl:
         )
         self.lap_length = float(lap_length)
         hl, hw = 0.5 * car_length, 0.5 * car_width
-        self._corners_list = [(hl, hw), (hl, -hw), (-hl, hw), (-hl, -hw)]
+        self._half_footprint = (hl, hw)  # [m] the corners are (+-hl, +-hw)
+        _corners_off(0.0, 1.0, 0.0, 0.0, 1.0, hl, hw)  # compiled (or loaded) now, not in a step
         self._half_widths_list = [float(h) for h in self.half_widths]
         # Plain-float end points for the per-step crossing test.
         lx = [float(v) for v in self.line.ravel()]
         fx = [float(v) for v in self.finish.ravel()]
         self._line_xy = (lx[0], lx[1], lx[2], lx[3])
         self._finish_xy = (fx[0], fx[1], fx[2], fx[3])
+        # A CG at least this far inside both boundaries has all four corners
+        # inside (no corner is farther from the CG): ``_off`` is False at once.
+        self._corner_reach = math.hypot(hl, hw) + _QUICK_MARGIN
+        # The lines' bounding boxes, grown by the margin: a step outside a
+        # box does not cross its line (``_crossed`` skips the full test).
+        self._line_box = _grown_box(self._line_xy)
+        self._finish_box = _grown_box(self._finish_xy)
         self.state = RaceState()
         self._s_last: float | None = None
         self._progress_at_crossing = 0.0
@@ -248,16 +269,12 @@ class RaceControl:
         with tangent (tx, ty): each footprint corner's offset is the CG's plus
         the corner's (rotated into the world) on the track's left normal
         (-ty, tx)."""
-        c, sn = math.cos(yaw), math.sin(yaw)
-        nx, ny = -ty, tx
         halves = self._half_widths_list
         half = halves[min(index, len(halves) - 1)]
-        above = below = 0
-        for cx, cy in self._corners_list:
-            lat = lateral + (c * cx - sn * cy) * nx + (sn * cx + c * cy) * ny
-            above += lat > half
-            below += lat < -half
-        return above == 4 or below == 4
+        if abs(lateral) + self._corner_reach < half:
+            return False  # every corner within a corner's reach of the CG, inside
+        hl, hw = self._half_footprint
+        return bool(_corners_off(lateral, tx, ty, yaw, half, hl, hw))
 
     def _advance_progress(self, s: float, cut: bool = False) -> None:
         """Add the change of station to ``s`` [m] (the short way round a loop);
@@ -277,12 +294,16 @@ class RaceControl:
         """A forward step from ``p0`` to ``p1``: start the clock or count a lap."""
         st = self.state
         if st.clock_start is None:
+            if _outside(p0, p1, self._line_box):
+                return
             u = segment_crossing_xy(p0, p1, self._line_xy)
             if u is not None:
                 t_cross = t_prev + u * (t - t_prev)
                 st.clock_start = t_cross
                 st.crossing_times.append(t_cross)
                 self._progress_at_crossing = st.progress_m
+            return
+        if _outside(p0, p1, self._finish_box):
             return
         u = segment_crossing_xy(p0, p1, self._finish_xy)
         if u is None:
@@ -313,6 +334,44 @@ class RaceControl:
             history.popleft()
         t0, p0 = history[0]
         st.stuck = t0 <= horizon and abs(progress - p0) < self.rules.stuck_progress_m
+
+
+@_compiled
+def _corners_off(lateral, tx, ty, yaw, half, hl, hw):  # noqa: PLR0917
+    """Whether the four corners (+-hl, +-hw) of a footprint whose CG is
+    ``lateral`` off the centreline with tangent (tx, ty), heading ``yaw``, all
+    lie beyond the same boundary at ``half``: ``RaceControl._off``'s placing,
+    compiled (in the corners' order; the same operations as in Python)."""
+    c, sn = math.cos(yaw), math.sin(yaw)
+    nx, ny = -ty, tx
+    above = below = 0
+    for cx, cy in ((hl, hw), (hl, -hw), (-hl, hw), (-hl, -hw)):
+        lat = lateral + (c * cx - sn * cy) * nx + (sn * cx + c * cy) * ny
+        above += lat > half
+        below += lat < -half
+    return above == 4 or below == 4
+
+
+def _grown_box(line: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+    """(x_lo, y_lo, x_hi, y_hi) of a line segment (ax, ay, bx, by), grown by ``_QUICK_MARGIN``."""
+    ax, ay, bx, by = line
+    m = _QUICK_MARGIN
+    return min(ax, bx) - m, min(ay, by) - m, max(ax, bx) + m, max(ay, by) + m
+
+
+def _outside(
+    p0: tuple[float, float], p1: tuple[float, float], box: tuple[float, float, float, float]
+) -> bool:
+    """Whether the step p0 -> p1 lies wholly on one far side of a grown box: it
+    cannot cross the segment inside (``segment_crossing_xy`` would say None)."""
+    x_lo, y_lo, x_hi, y_hi = box
+    (p0x, p0y), (p1x, p1y) = p0, p1
+    return (
+        (p0x < x_lo and p1x < x_lo)
+        or (p0x > x_hi and p1x > x_hi)
+        or (p0y < y_lo and p1y < y_lo)
+        or (p0y > y_hi and p1y > y_hi)
+    )
 
 
 def line_crossings_along(

@@ -6,6 +6,12 @@ coefficients from a ``.tir`` file, per-wheel slip ratios, camber) and none
 exposes the four-coefficient axle curve that the published FS simulators
 (fssim, EUFS) are parametrised with. The four formulas below are all we need.
 
+The car model runs them at every physics step, inside one compiled pass of
+``sim.vehicle_dynamics``; so each is a numba kernel on floats (``_slip_angles``
+and so on), and the functions of this module call them. No ``fastmath``: the
+kernels' numbers are Python's, bit for bit (``math``'s functions are the C
+library's in both; ``kernel_math.py_min``/``py_max`` are Python's ``min``/``max``).
+
 Slip angles (single track, body frame x forward / y left, CG at the origin)::
 
     front axle velocity in the wheel frame (steered by delta):
@@ -49,6 +55,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+
+from conesim.core.compiled import cached_njit
+from conesim.sim.kernel_math import py_max, py_min
 
 #: Smallest longitudinal wheel speed used in the slip angle [m/s]; keeps
 #: atan(w/u) finite when the car slides exactly sideways.
@@ -97,6 +106,13 @@ class PacejkaParams:
         return self.B * self.C * self.D
 
 
+def _probe() -> None:
+    """Nothing: what ``cached_njit`` asks numba to cache, from this file's directory."""
+
+
+_compiled = cached_njit(_probe, "conesim.sim.tyres")
+
+
 def slip_angles(
     vx: float, vy: float, yaw_rate: float, steer: float, *, lf: float, lr: float
 ) -> tuple[float, float]:
@@ -113,12 +129,19 @@ def slip_angles(
     Returns:
         (alpha_f, alpha_r) [rad]; positive gives a leftward force.
     """
+    alpha_f, alpha_r = _slip_angles(vx, vy, yaw_rate, steer, lf, lr)
+    return alpha_f, alpha_r
+
+
+@_compiled
+def _slip_angles(vx, vy, yaw_rate, steer, lf, lr):  # noqa: PLR0917
+    """:func:`slip_angles`, compiled."""
     c, s = math.cos(steer), math.sin(steer)
     vy_f = vy + lf * yaw_rate
     u_f = vx * c + vy_f * s
     w_f = -vx * s + vy_f * c
-    alpha_f = -math.atan(w_f / max(abs(u_f), U_MIN))
-    alpha_r = -math.atan((vy - lr * yaw_rate) / max(abs(vx), U_MIN))
+    alpha_f = -math.atan(w_f / py_max(abs(u_f), U_MIN))
+    alpha_r = -math.atan((vy - lr * yaw_rate) / py_max(abs(vx), U_MIN))
     return alpha_f, alpha_r
 
 
@@ -134,9 +157,15 @@ def lateral_force(alpha: float, fz: float, tyre: PacejkaParams, mu: float = 1.0)
     Returns:
         Lateral force Fy0 [N], |Fy0| <= mu * D * fz.
     """
-    b_alpha = tyre.B * alpha
-    phi = b_alpha - tyre.E * (b_alpha - math.atan(b_alpha))
-    return mu * tyre.D * fz * math.sin(tyre.C * math.atan(phi))
+    return float(_lateral_force(alpha, fz, tyre.B, tyre.C, tyre.D, tyre.E, mu))
+
+
+@_compiled
+def _lateral_force(alpha, fz, b, c, d, e, mu):  # noqa: PLR0917
+    """:func:`lateral_force` with the tyre's B, C, D, E, compiled."""
+    b_alpha = b * alpha
+    phi = b_alpha - e * (b_alpha - math.atan(b_alpha))
+    return mu * d * fz * math.sin(c * math.atan(phi))
 
 
 def friction_ellipse(fx: float, fy0: float, fz: float, mu_peak: float) -> tuple[float, float]:
@@ -151,9 +180,16 @@ def friction_ellipse(fx: float, fy0: float, fz: float, mu_peak: float) -> tuple[
     Returns:
         (Fx, Fy) [N] on or inside the ellipse of radius mu_peak * fz.
     """
+    fx_out, fy_out = _friction_ellipse(fx, fy0, fz, mu_peak)
+    return fx_out, fy_out
+
+
+@_compiled
+def _friction_ellipse(fx, fy0, fz, mu_peak):
+    """:func:`friction_ellipse`, compiled."""
     f_max = mu_peak * fz
     if f_max <= 0.0:
         return 0.0, 0.0
-    fx = min(max(fx, -f_max), f_max)
+    fx = py_min(py_max(fx, -f_max), f_max)
     ratio = fx / f_max
-    return fx, fy0 * math.sqrt(max(0.0, 1.0 - ratio * ratio))
+    return fx, fy0 * math.sqrt(py_max(0.0, 1.0 - ratio * ratio))

@@ -40,7 +40,7 @@ from dataclasses import dataclass
 import pymunk
 
 from conesim.core.pose import Pose2D
-from conesim.sim.vehicle_dynamics import BodyVelocity, blended_wrench
+from conesim.sim.vehicle_dynamics import packed, wrench
 from conesim.sim.vehicle_params import VehicleParams
 
 #: pymunk collision type of the car's footprint.
@@ -125,14 +125,18 @@ class SteeringActuator:
     def __init__(self, params: VehicleParams) -> None:
         self._p = params
         self.angle = 0.0  # [rad]
+        self._step: tuple[float, float, float] = (math.nan, 0.0, 0.0)  # (dt, gain, max change)
 
     def update(self, command: float, dt: float) -> float:
         """Advance by dt [s] towards command [rad]; return the new angle [rad]."""
         p = self._p
-        tau = p.steer_time_constant
-        gain = 1.0 - math.exp(-dt / tau) if tau > 0.0 else 1.0
+        step_dt, gain, max_change = self._step
+        if dt != step_dt:  # the same dt every physics step: the gain is worked out once
+            tau = p.steer_time_constant
+            gain = 1.0 - math.exp(-dt / tau) if tau > 0.0 else 1.0
+            max_change = p.max_steer_rate * dt
+            self._step = (dt, gain, max_change)
         change = (command - self.angle) * gain
-        max_change = p.max_steer_rate * dt
         change = min(max(change, -max_change), max_change)
         self.angle = min(max(self.angle + change, -p.max_steer), p.max_steer)
         return self.angle
@@ -160,6 +164,7 @@ class Vehicle:
                 f"gravity {tuple(space.gravity)} and damping {space.damping}"
             )
         self.params = params
+        self._packed = packed(params)  # the car model's parameters, as its kernels read them
         self._body = pymunk.Body(params.mass, params.yaw_inertia)
         nose = params.cg_to_front + params.front_overhang
         tail = nose - params.length
@@ -173,6 +178,9 @@ class Vehicle:
         space.add(self._body, self._shape)
         self._steering = SteeringActuator(params)
         self.reset(pose, speed)
+        # The model's kernels compile (or load from the cache) here, while the
+        # world is built, rather than in its first step (a pure call).
+        wrench(self._packed, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1e-3, 0.0)
 
     @property
     def body(self) -> pymunk.Body:
@@ -202,6 +210,9 @@ class Vehicle:
         self._ax_force = 0.0  # applied fx / m of the last step, for load transfer
         self._accel = (0.0, 0.0, 0.0)  # ax, ay, yaw_accel
         self._pre: tuple[float, float, float, float, float] | None = None
+        # The body's (angle, vx, vy, r) as post_step read them: the next
+        # pre_step starts from them (nothing moves the body in between).
+        self._read: tuple[float, float, float, float] | None = None
 
     def set_command(self, steer_rad: float, accel_mps2: float) -> None:
         """Hold a command until the next call, clipped to the vehicle's limits.
@@ -227,25 +238,31 @@ class Vehicle:
             raise ValueError(f"dt must be > 0 [s], got {dt!r}")
         steer = self._steering.update(self._steer_cmd, dt)
         b = self._body
-        yaw = b.angle
-        vwx, vwy = b.velocity
-        r = b.angular_velocity
+        read = self._read
+        if read is None:
+            yaw = b.angle
+            vwx, vwy = b.velocity
+            r = b.angular_velocity
+        else:
+            yaw, vwx, vwy, r = read
+            self._read = None
         c, s = math.cos(yaw), math.sin(yaw)
-        vel = BodyVelocity(c * vwx + s * vwy, -s * vwx + c * vwy, r)
         # The target of the kinematic model is the body frame at the end of
         # the step; pymunk turns the body by r * dt before it applies forces.
-        wrench = blended_wrench(
-            self.params,
-            vel,
+        fx, fy, mz = wrench(
+            self._packed,
+            c * vwx + s * vwy,
+            -s * vwx + c * vwy,
+            r,
             steer,
             self._accel_cmd,
-            ax_prev=self._ax_force,
-            dt=dt,
-            heading_change=r * dt,
+            self._ax_force,
+            dt,
+            r * dt,
         )
-        b.apply_force_at_local_point((wrench.fx, wrench.fy), (0.0, 0.0))
-        b.torque = b.torque + wrench.mz
-        self._ax_force = wrench.fx / self.params.mass
+        b.apply_force_at_local_point((fx, fy), (0.0, 0.0))
+        b.torque = b.torque + mz
+        self._ax_force = fx / self.params.mass
         self._pre = (vwx, vwy, r, yaw, dt)
 
     def post_step(self) -> Kinematics:
@@ -274,7 +291,9 @@ class Vehicle:
         )
         self._pre = None
         x, y = b.position
-        return self._motion(x, y, b.angle, velocity=(vwx, vwy, r))
+        angle = b.angle
+        self._read = (angle, vwx, vwy, r)
+        return self._motion(x, y, angle, velocity=(vwx, vwy, r))
 
     def kinematics(self) -> Kinematics:
         """The state's motion now as plain floats, without building a ``VehicleState``.

@@ -67,18 +67,41 @@ Why the blend: the dynamic model's lateral dynamics have eigenvalues near
 angles are undefined at rest); the kinematic model is exact at low speed
 where the tyres do not slip. At 200 Hz and v_low = 1.5 m/s, dt (C_f + C_r) /
 (m v_low) = 0.9, inside explicit Euler's stability limit of 2.
+
+Compiled: the car calls :func:`wrench` at every physics step, so each formula
+is a numba kernel on floats (``_axle_loads`` and so on, the tyres'
+from ``sim.tyres``), the parameters packed once into an array
+(:func:`packed`), and the functions of this module call them. No
+``fastmath``, ``math``'s C functions, Python's ``min``/``max``
+(``sim.kernel_math``): the numbers are Python's bit for bit. The
+one step left to Python is ``math.hypot`` (the blend's speed, the kinematic
+force's friction cap), whose CPython algorithm numba's differs from in the
+last bit.
 """
 
 from __future__ import annotations
 
+import functools
 import math
-from typing import NamedTuple
+from typing import Final, NamedTuple
 
-from conesim.sim.tyres import friction_ellipse, lateral_force, slip_angles
+import numpy as np
+from numpy.typing import NDArray
+
+from conesim.core.compiled import cached_njit
+from conesim.sim.kernel_math import py_max, py_min
+from conesim.sim.tyres import _friction_ellipse, _lateral_force, _slip_angles
 from conesim.sim.vehicle_params import VehicleParams
 
 #: Speed floor for the power limit P / v [m/s].
 _POWER_SPEED_FLOOR = 0.1
+
+# Layout of ``packed``'s array: the parameters the kernels read, by index.
+(MASS, YAW_INERTIA, WHEELBASE, LF, LR, CG_HEIGHT, GRAVITY, AIR_DENSITY, DRAG_AREA,
+ LIFT_AREA, AERO_FRONT, ROLLING, MAX_DRIVE, MAX_POWER, DRIVE_FRONT, BRAKE_FRONT,
+ MU, MU_FRONT, MU_REAR, BLEND_LOW, BLEND_HIGH, FRONT_B, FRONT_C, FRONT_D, FRONT_E,
+ REAR_B, REAR_C, REAR_D, REAR_E) = range(29)  # fmt: skip
+N_PARAMS: Final = 29
 
 
 class AxleLoads(NamedTuple):
@@ -118,6 +141,39 @@ class Wrench(NamedTuple):
     mz: float  # [N m]
 
 
+@functools.lru_cache(maxsize=64)
+def packed(p: VehicleParams) -> NDArray[np.float64]:
+    """The parameters the kernels read, as floats in the layout ``MASS`` ... ``REAR_E``
+    (derived ones, such as ``cg_to_rear``, as the properties give them); read-only."""
+    values = {
+        MASS: p.mass, YAW_INERTIA: p.yaw_inertia, WHEELBASE: p.wheelbase, LF: p.cg_to_front,
+        LR: p.cg_to_rear, CG_HEIGHT: p.cg_height, GRAVITY: p.gravity,
+        AIR_DENSITY: p.air_density, DRAG_AREA: p.drag_area, LIFT_AREA: p.lift_area,
+        AERO_FRONT: p.aero_balance_front, ROLLING: p.rolling_resistance,
+        MAX_DRIVE: p.max_drive_force, MAX_POWER: p.max_power,
+        DRIVE_FRONT: p.drive_front_share, BRAKE_FRONT: p.brake_front_share, MU: p.mu,
+        MU_FRONT: p.mu_front, MU_REAR: p.mu_rear, BLEND_LOW: p.blend_speed_low,
+        BLEND_HIGH: p.blend_speed_high, FRONT_B: p.tyre_front.B, FRONT_C: p.tyre_front.C,
+        FRONT_D: p.tyre_front.D, FRONT_E: p.tyre_front.E, REAR_B: p.tyre_rear.B,
+        REAR_C: p.tyre_rear.C, REAR_D: p.tyre_rear.D, REAR_E: p.tyre_rear.E,
+    }  # fmt: skip
+    out = np.array([float(values[i]) for i in range(N_PARAMS)])
+    out.setflags(write=False)
+    return out
+
+
+def _floats(values: tuple[float, ...]) -> tuple[float, ...]:
+    """The numbers as Python floats: the kernels compile once, for floats."""
+    return tuple(float(v) for v in values)
+
+
+def _probe() -> None:
+    """Nothing: what ``cached_njit`` asks numba to cache, from this file's directory."""
+
+
+_compiled = cached_njit(_probe, "conesim.sim.vehicle_dynamics")
+
+
 def axle_loads(p: VehicleParams, vx: float, ax: float) -> AxleLoads:
     """Static loads plus longitudinal load transfer and downforce.
 
@@ -129,18 +185,30 @@ def axle_loads(p: VehicleParams, vx: float, ax: float) -> AxleLoads:
     Returns:
         Front and rear normal loads [N], each >= 0.
     """
-    down = 0.5 * p.air_density * p.lift_area * vx * vx
-    transfer = p.mass * ax * p.cg_height / p.wheelbase
-    weight = p.mass * p.gravity
-    front = weight * p.cg_to_rear / p.wheelbase + down * p.aero_balance_front - transfer
-    rear = weight * p.cg_to_front / p.wheelbase + down * (1.0 - p.aero_balance_front) + transfer
-    return AxleLoads(max(front, 0.0), max(rear, 0.0))
+    return AxleLoads(*_axle_loads(packed(p), float(vx), float(ax)))
+
+
+@_compiled
+def _axle_loads(q, vx, ax):
+    """:func:`axle_loads` on the packed parameters ``q``, compiled."""
+    down = 0.5 * q[AIR_DENSITY] * q[LIFT_AREA] * vx * vx
+    transfer = q[MASS] * ax * q[CG_HEIGHT] / q[WHEELBASE]
+    weight = q[MASS] * q[GRAVITY]
+    front = weight * q[LR] / q[WHEELBASE] + down * q[AERO_FRONT] - transfer
+    rear = weight * q[LF] / q[WHEELBASE] + down * (1.0 - q[AERO_FRONT]) + transfer
+    return py_max(front, 0.0), py_max(rear, 0.0)
 
 
 def resistance_magnitude(p: VehicleParams, vx: float, loads: AxleLoads) -> float:
     """Drag plus rolling resistance magnitude, 0.5 rho CdA vx^2 + Crr Fz [N]."""
-    drag = 0.5 * p.air_density * p.drag_area * vx * vx
-    return drag + p.rolling_resistance * (loads.front + loads.rear)
+    return float(_resistance(packed(p), float(vx), *_floats(loads)))
+
+
+@_compiled
+def _resistance(q, vx, front, rear):
+    """:func:`resistance_magnitude` on the packed parameters, compiled."""
+    drag = 0.5 * q[AIR_DENSITY] * q[DRAG_AREA] * vx * vx
+    return drag + q[ROLLING] * (front + rear)
 
 
 def drive_brake_demand(
@@ -161,12 +229,19 @@ def drive_brake_demand(
     Returns:
         (drive, brake) totals [N], both >= 0, at most one of them non-zero.
     """
-    v_fwd = max(vx, 0.0)
-    feed_forward = resistance_magnitude(p, v_fwd, loads) if vx > 0.0 else 0.0
-    demand = p.mass * accel_cmd + feed_forward
+    drive, brake = _drive_brake(packed(p), float(accel_cmd), float(vx), *_floats(loads))
+    return drive, brake
+
+
+@_compiled
+def _drive_brake(q, accel_cmd, vx, front, rear):
+    """:func:`drive_brake_demand` on the packed parameters, compiled."""
+    v_fwd = py_max(vx, 0.0)
+    feed_forward = _resistance(q, v_fwd, front, rear) if vx > 0.0 else 0.0
+    demand = q[MASS] * accel_cmd + feed_forward
     if demand >= 0.0:
-        power_limit = p.max_power / max(v_fwd, _POWER_SPEED_FLOOR)
-        return min(demand, p.max_drive_force, power_limit), 0.0
+        power_limit = q[MAX_POWER] / py_max(v_fwd, _POWER_SPEED_FLOOR)
+        return py_min(py_min(demand, q[MAX_DRIVE]), power_limit), 0.0
     return 0.0, -demand
 
 
@@ -185,23 +260,31 @@ def longitudinal_forces(
     Returns:
         The longitudinal forces [N].
     """
-    drive, brake = drive_brake_demand(p, accel_cmd, vx, loads)
-    lim_f = p.mu_front * loads.front
-    lim_r = p.mu_rear * loads.rear
-    drive_f = min(drive * p.drive_front_share, lim_f)
-    drive_r = min(drive * (1.0 - p.drive_front_share), lim_r)
-    brake_f = min(brake * p.brake_front_share, lim_f)
-    brake_r = min(brake * (1.0 - p.brake_front_share), lim_r)
-    resist = resistance_magnitude(p, vx, loads)
+    return LongitudinalForces(
+        *_longitudinal(packed(p), float(accel_cmd), float(vx), *_floats(loads), float(dt))
+    )
+
+
+@_compiled
+def _longitudinal(q, accel_cmd, vx, front, rear, dt):  # noqa: PLR0917
+    """:func:`longitudinal_forces` on the packed parameters, compiled."""
+    drive, brake = _drive_brake(q, accel_cmd, vx, front, rear)
+    lim_f = q[MU_FRONT] * front
+    lim_r = q[MU_REAR] * rear
+    drive_f = py_min(drive * q[DRIVE_FRONT], lim_f)
+    drive_r = py_min(drive * (1.0 - q[DRIVE_FRONT]), lim_r)
+    brake_f = py_min(brake * q[BRAKE_FRONT], lim_f)
+    brake_r = py_min(brake * (1.0 - q[BRAKE_FRONT]), lim_r)
+    resist = _resistance(q, vx, front, rear)
 
     dissipative = brake_f + brake_r + resist
-    v_free = vx + (drive_f + drive_r) * dt / p.mass
-    if abs(v_free) * p.mass <= dissipative * dt:
+    v_free = vx + (drive_f + drive_r) * dt / q[MASS]
+    if abs(v_free) * q[MASS] <= dissipative * dt:
         # Stick: scale the dissipative forces so that vx_next = 0 exactly.
-        scale = p.mass * v_free / (dissipative * dt) if dissipative > 0.0 else 0.0
+        scale = q[MASS] * v_free / (dissipative * dt) if dissipative > 0.0 else 0.0
     else:
         scale = 1.0 if v_free > 0.0 else -1.0
-    return LongitudinalForces(drive_f - scale * brake_f, drive_r - scale * brake_r, -scale * resist)
+    return drive_f - scale * brake_f, drive_r - scale * brake_r, -scale * resist
 
 
 def dynamic_wrench(
@@ -219,19 +302,21 @@ def dynamic_wrench(
     Returns:
         Resultant at the CG in the body frame, and the yaw moment.
     """
-    lf, lr = p.cg_to_front, p.cg_to_rear
-    alpha_f, alpha_r = slip_angles(vel.vx, vel.vy, vel.yaw_rate, steer, lf=lf, lr=lr)
-    fy0_f = lateral_force(alpha_f, loads.front, p.tyre_front, p.mu)
-    fy0_r = lateral_force(alpha_r, loads.rear, p.tyre_rear, p.mu)
-    fx_f, fy_f = friction_ellipse(lon.front, fy0_f, loads.front, p.mu_front)
-    fx_r, fy_r = friction_ellipse(lon.rear, fy0_r, loads.rear, p.mu_rear)
+    return Wrench(*_dynamic(packed(p), *_floats(vel), float(steer), *_floats(loads), *_floats(lon)))
+
+
+@_compiled
+def _dynamic(q, vx, vy, yaw_rate, steer, front, rear, lon_f, lon_r, resistance):  # noqa: PLR0917
+    """:func:`dynamic_wrench` on the packed parameters, compiled."""
+    lf, lr = q[LF], q[LR]
+    alpha_f, alpha_r = _slip_angles(vx, vy, yaw_rate, steer, lf, lr)
+    fy0_f = _lateral_force(alpha_f, front, q[FRONT_B], q[FRONT_C], q[FRONT_D], q[FRONT_E], q[MU])
+    fy0_r = _lateral_force(alpha_r, rear, q[REAR_B], q[REAR_C], q[REAR_D], q[REAR_E], q[MU])
+    fx_f, fy_f = _friction_ellipse(lon_f, fy0_f, front, q[MU_FRONT])
+    fx_r, fy_r = _friction_ellipse(lon_r, fy0_r, rear, q[MU_REAR])
     c, s = math.cos(steer), math.sin(steer)
     front_lat = fx_f * s + fy_f * c
-    return Wrench(
-        fx=fx_f * c - fy_f * s + fx_r + lon.resistance,
-        fy=front_lat + fy_r,
-        mz=lf * front_lat - lr * fy_r,
-    )
+    return fx_f * c - fy_f * s + fx_r + resistance, front_lat + fy_r, lf * front_lat - lr * fy_r
 
 
 def kinematic_wrench(
@@ -259,30 +344,55 @@ def kinematic_wrench(
     Returns:
         Resultant at the CG in the body frame (start of the step), and the moment.
     """
-    vx, vy, yaw_rate = vel
-    vx_next = vx + dt * (lon.front + lon.rear + lon.resistance) / p.mass
+    fx, fy, mz, f_max = _kinematic(
+        packed(p), *_floats(vel), float(steer), *_floats(loads), *_floats(lon), float(dt),
+        float(heading_change),
+    )  # fmt: skip
+    fx, fy = _friction_capped(fx, fy, f_max)
+    return Wrench(fx, fy, mz)
+
+
+@_compiled
+def _kinematic(  # noqa: PLR0917
+    q, vx, vy, yaw_rate, steer, front, rear, lon_f, lon_r, resistance, dt, heading_change
+):
+    """:func:`kinematic_wrench` on the packed parameters, compiled, up to the force's
+    friction cap: (fx, fy, mz, the cap f_max) (``_friction_capped`` applies it)."""
+    vx_next = vx + dt * (lon_f + lon_r + resistance) / q[MASS]
     tan_d = math.tan(steer)
-    vy_kin = vx_next * p.cg_to_rear * tan_d / p.wheelbase
-    r_kin = vx_next * tan_d / p.wheelbase
+    vy_kin = vx_next * q[LR] * tan_d / q[WHEELBASE]
+    r_kin = vx_next * tan_d / q[WHEELBASE]
     c, s = math.cos(heading_change), math.sin(heading_change)
-    fx = p.mass * (c * vx_next - s * vy_kin - vx) / dt
-    fy = p.mass * (s * vx_next + c * vy_kin - vy) / dt
-    mz = p.yaw_inertia * (r_kin - yaw_rate) / dt
+    fx = q[MASS] * (c * vx_next - s * vy_kin - vx) / dt
+    fy = q[MASS] * (s * vx_next + c * vy_kin - vy) / dt
+    mz = q[YAW_INERTIA] * (r_kin - yaw_rate) / dt
     # Friction cap: the tyres cannot hold the car on the kinematic path
     # against more than their combined grip (matters only in collisions).
-    f_max = p.mu_front * loads.front + p.mu_rear * loads.rear
+    f_max = q[MU_FRONT] * front + q[MU_REAR] * rear
+    m_max = q[MU_FRONT] * front * q[LF] + q[MU_REAR] * rear * q[LR]
+    mz = py_min(py_max(mz, -m_max), m_max)
+    return fx, fy, mz, f_max
+
+
+def _friction_capped(fx: float, fy: float, f_max: float) -> tuple[float, float]:
+    """The kinematic force (fx, fy) scaled down to ``f_max`` [N] when it is larger
+    (in Python: ``math.hypot``'s last bit is CPython's own)."""
     f_norm = math.hypot(fx, fy)
     if f_norm > f_max:
-        fx, fy = fx * f_max / f_norm, fy * f_max / f_norm
-    m_max = p.mu_front * loads.front * p.cg_to_front + p.mu_rear * loads.rear * p.cg_to_rear
-    mz = min(max(mz, -m_max), m_max)
-    return Wrench(fx, fy, mz)
+        return fx * f_max / f_norm, fy * f_max / f_norm
+    return fx, fy
 
 
 def blend_weight(p: VehicleParams, speed: float) -> float:
     """Weight of the dynamic model, 0 below blend_speed_low, 1 above blend_speed_high."""
-    w = (speed - p.blend_speed_low) / (p.blend_speed_high - p.blend_speed_low)
-    return min(max(w, 0.0), 1.0)
+    return float(_blend_weight(packed(p), float(speed)))
+
+
+@_compiled
+def _blend_weight(q, speed):
+    """:func:`blend_weight` on the packed parameters, compiled."""
+    w = (speed - q[BLEND_LOW]) / (q[BLEND_HIGH] - q[BLEND_LOW])
+    return py_min(py_max(w, 0.0), 1.0)
 
 
 def blended_wrench(
@@ -309,17 +419,49 @@ def blended_wrench(
     Returns:
         Resultant at the CG in the body frame, and the yaw moment.
     """
-    loads = axle_loads(p, vel.vx, ax_prev)
-    lon = longitudinal_forces(p, accel_cmd, vel.vx, loads, dt)
-    w = blend_weight(p, math.hypot(vel.vx, vel.vy))
-    if w >= 1.0:
-        return dynamic_wrench(p, vel, steer, loads, lon)
-    kin = kinematic_wrench(p, vel, steer, loads, lon, dt=dt, heading_change=heading_change)
-    if w <= 0.0:
-        return kin
-    dyn = dynamic_wrench(p, vel, steer, loads, lon)
+    vx, vy, r = _floats(vel)
     return Wrench(
-        w * dyn.fx + (1.0 - w) * kin.fx,
-        w * dyn.fy + (1.0 - w) * kin.fy,
-        w * dyn.mz + (1.0 - w) * kin.mz,
+        *wrench(packed(p), vx, vy, r, *_floats((steer, accel_cmd, ax_prev, dt, heading_change)))
     )
+
+
+def wrench(  # noqa: PLR0917
+    q: NDArray[np.float64],
+    vx: float,
+    vy: float,
+    yaw_rate: float,
+    steer: float,
+    accel_cmd: float,
+    ax_prev: float,
+    dt: float,
+    heading_change: float,
+) -> tuple[float, float, float]:
+    """:func:`blended_wrench` on plain floats and the packed parameters ``q``
+    (``packed``): (fx [N], fy [N], mz [N m]); the car's per-step call."""
+    w, dfx, dfy, dmz, kfx, kfy, kmz, f_max = _blended(
+        q, vx, vy, yaw_rate, steer, accel_cmd, ax_prev, dt, heading_change, math.hypot(vx, vy)
+    )
+    if w >= 1.0:
+        return dfx, dfy, dmz
+    kfx, kfy = _friction_capped(kfx, kfy, f_max)
+    if w <= 0.0:
+        return kfx, kfy, kmz
+    return w * dfx + (1.0 - w) * kfx, w * dfy + (1.0 - w) * kfy, w * dmz + (1.0 - w) * kmz
+
+
+@_compiled
+def _blended(q, vx, vy, yaw_rate, steer, accel_cmd, ax_prev, dt, heading_change, speed):  # noqa: PLR0917
+    """The parts of :func:`wrench` (``speed`` = hypot(vx, vy), from Python): the
+    blend weight w, the dynamic wrench (w > 0, else zeros), the kinematic one
+    before its force's friction cap and that cap (w < 1, else zeros)."""
+    front, rear = _axle_loads(q, vx, ax_prev)
+    lon_f, lon_r, resistance = _longitudinal(q, accel_cmd, vx, front, rear, dt)
+    w = _blend_weight(q, speed)
+    dfx = dfy = dmz = kfx = kfy = kmz = f_max = 0.0
+    if w > 0.0:
+        dfx, dfy, dmz = _dynamic(q, vx, vy, yaw_rate, steer, front, rear, lon_f, lon_r, resistance)
+    if w < 1.0:
+        kfx, kfy, kmz, f_max = _kinematic(
+            q, vx, vy, yaw_rate, steer, front, rear, lon_f, lon_r, resistance, dt, heading_change
+        )
+    return w, dfx, dfy, dmz, kfx, kfy, kmz, f_max

@@ -70,11 +70,18 @@ def sample_colours(
     Returns:
         n labels from ``CONE_COLOURS``.
     """
-    cdf = confusion_cdf[true_class]  # (n, 4)
-    reported = np.minimum(np.sum(u[:, None] >= cdf, axis=1), UNKNOWN)
-    reported = np.where(coloured, reported, UNKNOWN)
-    labels = [COLOUR_CLASSES[k] for k in reported.tolist()]
-    if report_big_orange:
-        for i in np.flatnonzero(is_big & (reported == ORANGE)):
-            labels[i] = "big_orange"
+    # Drawn from the cumulative row: the first class whose edge exceeds u.
+    # Per detection on plain floats (a scan holds a few dozen at most, where
+    # numpy's cost per call exceeds the work; the same comparisons).
+    rows = confusion_cdf.tolist()
+    labels = []
+    for c, big, seen, draw in zip(
+        true_class.tolist(), is_big.tolist(), coloured.tolist(), u.tolist(), strict=True
+    ):
+        k = UNKNOWN
+        if seen:
+            e0, e1, e2, e3 = rows[c]  # the four classes' cumulative edges
+            k = min(int(draw >= e0) + (draw >= e1) + (draw >= e2) + (draw >= e3), UNKNOWN)
+        big_label = report_big_orange and big and k == ORANGE
+        labels.append("big_orange" if big_label else COLOUR_CLASSES[k])
     return tuple(labels)

@@ -100,10 +100,12 @@ class BiasRandomWalk:
         """Advance by ``dt`` [s] (>= 0) and return the new value, shape (dim,)."""
         if not (dt >= 0.0 and math.isfinite(dt)):
             check_non_negative("BiasRandomWalk.step", "dt", dt, "[s]")
-        w = self._rng.standard_normal(self.value.shape)
         if self.density != 0.0:
+            w = self._rng.standard_normal(self.value.shape)
             self.value = self.value + self.density * math.sqrt(dt) * w
-        # else b + 0 * w is b bit for bit (b starts at +0 and w is finite); the
-        # draw is still made, so the stream advances as with any density.
+        # else b + 0 * w is b bit for bit (b starts at +0 and w is finite), so
+        # nothing is drawn: the walk's stream is its own (no other draw moves)
+        # and its density is fixed for its life (the IMU calibrated to zero,
+        # every step of the ideal and rtk profiles; no per-step draw for it).
         # A caller gets its own array either way, never the walk's state.
         return self.value.copy()

@@ -160,23 +160,24 @@ class SensorSuite:
         deliver_by = t + TIME_EPS
         if t < self._next_capture and self._next_delivery > deliver_by:
             return []  # no clock is due and no queued message is
-        next_capture = math.inf
-        slots = self._slots
-        for sensor, clock, queue, _ in slots:
+        next_capture = next_delivery = math.inf
+        out: list[tuple[float, int, Message]] = []
+        # Each sensor captures, then its due deliveries are taken: a queue only
+        # ever holds its own sensor's messages, so the order of ``out`` is that
+        # of two passes (all captures, then all deliveries) before the sort.
+        for sensor, clock, queue, rank in self._slots:
             # ``due`` is False, with no side effect, below the threshold.
             if t >= clock.threshold and clock.due(t) and sensor.config.enabled:
                 message = sensor.capture(truth)
                 if message is not None:
                     queue.append((t + sensor.config.latency, t, message))
             next_capture = min(next_capture, clock.threshold)
-        out: list[tuple[float, int, Message]] = []
-        next_delivery = math.inf
-        for _, _, queue, rank in slots:
-            while queue and queue[0][0] <= deliver_by:
-                _, stamp, message = queue.popleft()
-                out.append((stamp, rank, message))
-            if queue and queue[0][0] < next_delivery:
-                next_delivery = queue[0][0]
+            if queue:
+                while queue and queue[0][0] <= deliver_by:
+                    _, stamp, message = queue.popleft()
+                    out.append((stamp, rank, message))
+                if queue and queue[0][0] < next_delivery:
+                    next_delivery = queue[0][0]
         self._next_capture, self._next_delivery = next_capture, next_delivery
         if not out:
             return []

@@ -10,7 +10,8 @@ from numpy.testing import assert_allclose
 
 from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
-from conesim.sim.progress import PolylineProgress, segment_crossing
+from conesim.sim import race_control
+from conesim.sim.progress import PolylineProgress, segment_crossing, segment_crossing_xy
 from conesim.sim.race_control import RaceControl, RaceRules
 
 R = 20.0  # [m] centreline radius
@@ -281,3 +282,30 @@ def test_off_track_needs_all_four_corners_outside() -> None:
         pose = pose_on_circle(1.0 + 1e-3, R + 2.0 + offset)  # half width 2 m + offset
         rc.update(0.0, 0.005, prev, pose)
         assert rc.state.is_off_track is expected
+
+
+def test_quick_rejections_answer_as_the_full_tests() -> None:
+    """The per-step shortcuts change no answer: a CG more than a corner's reach
+    (hypot(1.45, 0.7) = 1.61 m, + 1 cm) inside the 2 m half width is on the
+    track, as placing the four corners says; a step outside the timing line's
+    box (grown by 1 cm) does not cross the line, as the crossing test says."""
+    rc = circle_control()
+    assert rc._corner_reach == pytest.approx(math.hypot(1.45, 0.7) + 0.01)
+    rng = np.random.default_rng(8)
+    quick = 0
+    for _ in range(3000):
+        lateral, yaw, heading = rng.uniform(-3.5, 3.5), rng.uniform(-4, 4), rng.uniform(-4, 4)
+        tx, ty = math.cos(heading), math.sin(heading)
+        c, sn = math.cos(yaw), math.sin(yaw)
+        lats = [
+            lateral + (c * cx - sn * cy) * -ty + (sn * cx + c * cy) * tx
+            for cx, cy in ((1.45, 0.7), (1.45, -0.7), (-1.45, 0.7), (-1.45, -0.7))
+        ]
+        full = all(v > 2.0 for v in lats) or all(v < -2.0 for v in lats)
+        assert rc._off(lateral, 0, tx, ty, yaw) is full
+        quick += abs(lateral) + rc._corner_reach < 2.0
+        p0 = (R + rng.uniform(-3.0, 3.0), rng.uniform(-0.5, 0.5))
+        p1 = (p0[0] + rng.normal(0.0, 0.1), p0[1] + rng.normal(0.0, 0.1))
+        if race_control._outside(p0, p1, rc._line_box):
+            assert segment_crossing_xy(p0, p1, rc._line_xy) is None
+    assert quick > 300  # the shortcut was taken

@@ -11,6 +11,7 @@ from numpy.testing import assert_allclose
 
 from conesim.core.messages import ConeDetections
 from conesim.core.pose import Pose2D
+from conesim.sim.sensors.cone_colour import sample_colours
 from conesim.sim.sensors.cone_detector import ConeDetector, ConeDetectorConfig
 from conesim.sim.sensors.cone_map import ConeMap
 from conesim.sim.sensors.profiles import get_profile
@@ -227,3 +228,29 @@ def test_truth_rejects_bad_cone_shapes(bad: np.ndarray) -> None:
     """TruthSample.cone_positions must be (n, 2) with n kinds."""
     with pytest.raises(ValueError, match="cone_positions"):
         TruthSample(0.0, Pose2D(0.0, 0.0, 0.0), cone_positions=bad, cone_kinds=("blue",) * 3)
+
+
+def test_sample_colours_is_the_array_formulation() -> None:
+    """The per-detection labels equal those of the numpy formulation they
+    replaced (cumulative row, first edge above u; unknown when not coloured;
+    big_orange for a big cone labelled orange), on a confusion that mixes all."""
+    rng = np.random.default_rng(12)
+    confusion = rng.dirichlet(np.ones(4), size=4)
+    cdf = np.cumsum(confusion, axis=1)
+    cdf[:, -1] = 1.0
+    for n in (0, 1, 7, 40):
+        true_class = rng.integers(0, 4, n)
+        is_big = rng.random(n) < 0.3
+        coloured = rng.random(n) < 0.7
+        u = rng.random(n)
+        for big_orange in (True, False):
+            reported = np.minimum(np.sum(u[:, None] >= cdf[true_class], axis=1), 3)
+            reported = np.where(coloured, reported, 3)
+            want = [("blue", "yellow", "orange", "unknown")[k] for k in reported.tolist()]
+            if big_orange:
+                for i in np.flatnonzero(is_big & (reported == 2)):
+                    want[i] = "big_orange"
+            got = sample_colours(
+                true_class, is_big, coloured, u, confusion_cdf=cdf, report_big_orange=big_orange
+            )
+            assert got == tuple(want)

@@ -12,12 +12,14 @@ from conesim.core.messages import ConeDetections, Header
 from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
 from conesim.envs.observation import SensorMemory, build_dict, build_vector
+from conesim.sim import progress
 from conesim.sim.progress import PolylineProgress
 from conesim.sim.sensors.profiles import get_profile
 from conesim.sim.sensors.suite import SensorSuite
 from conesim.sim.sensors.truth import TruthSample
 from conesim.sim.world import World, WorldConfig
 from conesim.tracks import load_track
+from tests.sim import progress_reference
 
 
 def _wiggle(n: int, rng: np.random.Generator) -> np.ndarray:
@@ -134,3 +136,24 @@ def test_gps_scalar_conversion_is_the_library_one() -> None:
     for bad in (math.nan, math.inf, 1e9):
         with pytest.raises(GeodesyError):
             gps._to_gps(0.0, bad)
+
+
+def test_the_walk_kernel_is_the_python_walk() -> None:
+    """The compiled walk and offset give the plain-Python formulation's numbers,
+    bit for bit, on a closed circle and off both ends of an open arc."""
+    rng = np.random.default_rng(9)
+    theta = np.linspace(0.0, 2 * math.pi, 80, endpoint=False)
+    circle = 20.0 * np.column_stack([np.cos(theta), np.sin(theta)])
+    for points, closed in ((circle, True), (circle[:50], False)):
+        tracker = PolylineProgress(Polyline(points, closed))
+        segments = [tuple(float(v) for v in row) for row in tracker._segments]
+        i = 0
+        path = np.vstack([circle * rng.uniform(0.9, 1.1, (80, 1)), _wiggle(200, rng) + circle[0]])
+        for x, y in path:
+            want = progress_reference.walk(segments, closed, float(x), float(y), i)
+            assert tracker._walk(float(x), float(y), i) == want
+            j, d2, u, lateral = want
+            assert progress._offset(lateral, d2, u, segments[j][4]) == (
+                progress_reference.offset(lateral, d2, u, segments[j][4])
+            )
+            i = j
