@@ -108,6 +108,37 @@ def test_same_seed_same_map() -> None:
     assert np.array_equal(sa[0], sb[0]) and np.array_equal(sa[1], sb[1])
 
 
+def test_compressed_map_gives_the_dense_filters_numbers() -> None:
+    """The ring's 17 s (the map built, the loop closed, then frozen), seed 3: the pose and
+    landmarks 0, 17 and 39 with landmark 17's covariance are the numbers the filter gave
+    with the whole (n, n) P in its state (commit 5e3939e), to 1e-9."""
+    ekf, _ = loop_run(3)
+    state = ekf.landmark_state()
+    assert state is not None
+    xy, cov, _ = state
+    est = ekf.estimate()
+    assert len(xy) == 40 and len(est.state) == 7  # the estimate: the vehicle's states
+    pose = [est.pose.x, est.pose.y, est.pose.yaw]
+    assert_allclose(pose, [7.94150393444832, 6.049959590898539, 2.2169620089395465], atol=1e-9)
+    assert_allclose(
+        np.diag(est.pose_covariance),
+        [0.001155356225893306, 0.0011172336806638565, 2.447901731276478e-07],
+        rtol=0, atol=1e-12,
+    )  # fmt: skip
+    assert_allclose(
+        xy[[0, 17, 39]],
+        [[7.972149650111921, 0.03818413525429518], [-0.04886936250521091, 8.026509598576984],
+         [-0.04935122773316097, -11.975021214861385]],
+        rtol=0, atol=1e-9,
+    )  # fmt: skip
+    assert_allclose(
+        cov[17],
+        [[0.0012200407493159584, 2.0852590938103596e-05],
+         [2.0852590938103596e-05, 0.0012150775358210249]],
+        rtol=0, atol=1e-12,
+    )  # fmt: skip
+
+
 def _static_filter(update: SlamUpdate) -> FusionEkf:
     """A filter at the origin (1 mm, 0.01 deg), the car standing still."""
     from tests.localization.cone_helpers import filter_at
