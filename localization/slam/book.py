@@ -110,7 +110,8 @@ class MapBook:
         """Each landmark's colour class: the majority of its votes (ties to the first), or
         -1 without votes, (L,)."""
         best = np.argmax(self.votes, axis=1)
-        return np.where(self.votes.max(axis=1, initial=0.0) > 0.0, best, -1)
+        best[~self.votes.any(axis=1)] = -1  # votes are counts, >= 0
+        return best
 
     def labels(self) -> list[str]:
         """Each landmark's colour (:meth:`classes`' names, ``unknown`` for -1)."""

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
+import pytest
 from numpy.testing import assert_allclose
 
 from conesim.core.messages import (
@@ -19,6 +21,7 @@ from conesim.core.messages import (
 from conesim.core.pose import Pose2D
 from conesim.envs.map_quality import map_quality
 from conesim.localization.cones import ConeUpdateConfig
+from conesim.localization.cones.landmarks import LandmarkMap
 from conesim.localization.ekf import EkfConfig, FusionEkf
 from conesim.localization.ekf.synthetic import (
     Path,
@@ -240,3 +243,22 @@ def test_book_candidates_confirm_after_three_sightings_and_vote_colours() -> Non
     assert book.labels() == ["blue"]
     book, _, _ = book.sighted(np.zeros((0, 2)), None, 0.2 + cfg.candidate_timeout + 0.01, cfg)
     assert len(book.cand_seen) == 0  # timed out
+
+
+def test_book_classes_are_the_vote_majority_and_make_the_landmark_map() -> None:
+    """Worked: votes (2 blue), (none), (1 yellow, 1 orange) are classes 0, -1 and 1 (a tie
+    goes to the first), the labels blue, unknown, yellow; a LandmarkMap takes the classes
+    as they are, and refuses a class outside -1..2."""
+    book = dataclasses.replace(
+        MapBook.empty(),
+        votes=np.array([[2.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 1.0, 1.0]]),
+        hits=np.ones(3, dtype=np.intp),
+        misses=np.zeros(3, dtype=np.intp),
+    )
+    assert book.classes().tolist() == [0, -1, 1]
+    assert book.labels() == ["blue", "unknown", "yellow"]
+    positions = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]])
+    lmap = LandmarkMap(positions, book.classes())
+    assert lmap.classes.tolist() == LandmarkMap(positions, book.labels()).classes.tolist()
+    with pytest.raises(ValueError, match="classes"):
+        LandmarkMap(positions, np.array([0, 1, 5]))
