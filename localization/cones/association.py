@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -77,6 +78,18 @@ class Association:
 
     def __len__(self) -> int:
         return len(self.detections)
+
+
+class StateCones(NamedTuple):
+    """The covariance of map cones that are states (SLAM, ``localization.slam``).
+
+    Attributes:
+        pose: each cone's covariance with (x, y, yaw), (L, 3, 2) [m^2, m rad].
+        own: each cone's own, (L, 2, 2) [m^2].
+    """
+
+    pose: FloatArray
+    own: FloatArray
 
 
 def _rotation(yaw: float) -> FloatArray:
@@ -178,7 +191,7 @@ def associate(
     cfg: ConeUpdateConfig,
     gate: float,
     bias: int | None = None,
-    landmarks: int | None = None,
+    landmarks: StateCones | None = None,
 ) -> Association:
     """Match a scan's detections to map cones (module docstring).
 
@@ -192,10 +205,10 @@ def associate(
         cfg: the settings.
         gate: the pairs' chi-square gate (2 dof).
         bias: the index of ``map_bias_e`` in ``x``, or None.
-        landmarks: with the cones in the state (SLAM, ``localization.slam``):
-            the index of cone 0's east in ``x`` (cone j at ``landmarks + 2 j``;
-            ``lmap`` holds their positions), so each pair's gate takes the
-            cone's covariance and its correlation with the pose; else None.
+        landmarks: with the cones in the state (SLAM, ``localization.slam``;
+            ``lmap`` holds their positions, and ``x`` and ``p`` may be the
+            vehicle's only): their covariance, so each pair's gate takes the
+            cone's and its correlation with the pose; else None.
     """
     k = len(points)
     pose = np.array([x.item(X), x.item(Y), x.item(YAW)])
@@ -211,13 +224,13 @@ def associate(
     bound = (
         p3[0, 0] + p3[1, 1] + p3[2, 2] * reach * reach
         + 2.0 * math.hypot(p3[0, 2], p3[1, 2]) * reach + rw[:, 0, 0] + rw[:, 1, 1]
-        + 2.0 * float(np.trace(pk[3:, 3:])) + 2.0 * _largest_cone_variance(p, landmarks)
+        + 2.0 * float(np.trace(pk[3:, 3:])) + 2.0 * _largest_cone_variance(landmarks)
     )  # fmt: skip
     radius = np.minimum(np.sqrt(gate * bound), cfg.max_search_radius)
     det, cone = _candidates(lmap, w, radius)
     counts = ConeCounts(scans=1)
     if len(det):
-        pair_cov = pk if landmarks is None else _pair_covariance(p, landmarks, cone)
+        pair_cov = pk if landmarks is None else _pair_covariance(p3, landmarks, cone)
         d2 = _mahalanobis(pose - [*shift, 0.0], pair_cov, w[det], rw[det], lmap.positions[cone])
         gated = d2 <= gate
         det, cone = det[gated], cone[gated]
@@ -246,16 +259,19 @@ def associate(
     return Association(det, cone, counts, missed, np.flatnonzero(~has_geo))
 
 
-def _largest_cone_variance(p: FloatArray, landmarks: int | None) -> float:
+def _largest_cone_variance(cones: StateCones | None) -> float:
     """The largest trace of a state cone's 2x2 covariance (0 without cones in the state)."""
-    if landmarks is None or landmarks >= len(p):
+    if cones is None or not len(cones.own):
         return 0.0
-    var = np.diagonal(p)[landmarks:]
-    return float((var[0::2] + var[1::2]).max())
+    return float(np.trace(cones.own, axis1=1, axis2=2).max())
 
 
-def _pair_covariance(p: FloatArray, landmarks: int, cone: IntArray) -> FloatArray:
+def _pair_covariance(p3: FloatArray, cones: StateCones, cone: IntArray) -> FloatArray:
     """P over (x, y, yaw, cone east, cone north) for each pair's cone, (q, 5, 5)."""
-    col = landmarks + 2 * cone
-    idx = np.column_stack([np.full((len(cone), 3), [X, Y, YAW]), col, col + 1])
-    return p[idx[:, :, None], idx[:, None, :]]
+    out = np.empty((len(cone), 5, 5))
+    out[:, :3, :3] = p3
+    cross = cones.pose[cone]
+    out[:, :3, 3:] = cross
+    out[:, 3:, :3] = cross.transpose(0, 2, 1)
+    out[:, 3:, 3:] = cones.own[cone]
+    return out

@@ -23,7 +23,8 @@ class LandmarkMap:
 
     Args:
         positions: (n, 2) [m] the cones as surveyed.
-        colours: n labels from ``CONE_COLOURS`` (``unknown`` matches any colour).
+        colours: n labels from ``CONE_COLOURS`` (``unknown`` matches any colour),
+            or their classes (``COLOUR_CLASS``'s values, an int array (n,)).
 
     Attributes:
         positions: (n, 2) [m], read-only.
@@ -31,20 +32,26 @@ class LandmarkMap:
         tree: ``scipy.spatial.cKDTree`` over ``positions``.
     """
 
-    def __init__(self, positions: ArrayLike, colours: Sequence[str]) -> None:
+    def __init__(self, positions: ArrayLike, colours: Sequence[str] | NDArray[np.intp]) -> None:
         p = np.array(positions, dtype=float)
         if p.ndim != 2 or p.shape[1] != 2 or len(p) == 0:
             raise ValueError(f"LandmarkMap: positions must be (n, 2), n >= 1, got {p.shape}")
         if len(colours) != len(p):
             raise ValueError(f"LandmarkMap: {len(colours)} colours for {len(p)} cones")
-        unknown = sorted(set(colours) - set(COLOUR_CLASS))
-        if unknown:
-            raise ValueError(
-                f"LandmarkMap: unknown colours {unknown}; allowed {list(COLOUR_CLASS)}"
-            )
+        if isinstance(colours, np.ndarray):  # classes (a map being built, ``slam``)
+            classes = np.array(colours, dtype=np.intp)
+            if classes.ndim != 1 or not ((classes >= -1) & (classes <= 2)).all():
+                raise ValueError("LandmarkMap: colour classes must be (n,) in -1..2")
+        else:
+            unknown = sorted(set(colours) - set(COLOUR_CLASS))
+            if unknown:
+                raise ValueError(
+                    f"LandmarkMap: unknown colours {unknown}; allowed {list(COLOUR_CLASS)}"
+                )
+            classes = colour_classes(colours)
         p.setflags(write=False)
         self.positions = p
-        self.classes = colour_classes(colours)
+        self.classes = classes
         self.classes.setflags(write=False)
         self.tree = cKDTree(p)
 

@@ -17,8 +17,8 @@ and typed call), :mod:`.kernels` (the motion model, compiled, with its
 derivation and Jacobians), :mod:`.observation` (h(x) and H of each sensor),
 :mod:`.config` (settings and per-profile defaults),
 :mod:`.measurements` (message checks), :mod:`.history` (late measurements),
-:mod:`.filter` (the filter), :mod:`.augmented` (its Kalman steps with cone
-landmarks in the state, ``slam``), :mod:`.estimate` (its output), :mod:`.health`
+:mod:`.filter` (the filter), :mod:`.augmented` (the landmarks' part of
+the state beside filterpy's, ``slam``), :mod:`.estimate` (its output), :mod:`.health`
 (rejection counters), :mod:`.synthetic` (a synthetic car for consistency tests
 and benchmarks; not used by the pipeline).
 """

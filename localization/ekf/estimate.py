@@ -24,8 +24,9 @@ class Estimate:
         lateral_speed: leftward speed of the antenna, vy [m/s].
         yaw_rate: the last gyro sample minus the estimated bias [rad/s].
         pose_covariance: covariance of (x, y, yaw), (3, 3) [m^2, m rad, rad^2].
-        covariance: covariance of the whole state, (n, n).
-        state: the whole state, (n,) (order: ``names``).
+        covariance: covariance of the whole state, (n, n) (with ``slam``, of the
+            vehicle's states: the map is ``FusionEkf.landmark_state()``).
+        state: the whole state, (n,) (order: ``names``; the vehicle's with ``slam``).
         names: state names (``localization.ekf.model``).
     """
 

@@ -79,6 +79,7 @@ from scipy.stats import chi2
 from conesim.core.messages import ConeDetections, Message
 from conesim.localization.ekf import augmented, kernels
 from conesim.localization.ekf import model as m
+from conesim.localization.ekf.augmented import MapState
 from conesim.localization.ekf.config import EkfConfig
 from conesim.localization.ekf.estimate import Estimate
 from conesim.localization.ekf.health import Health, RejectReason, Sensor, UpdateResult
@@ -88,7 +89,7 @@ from conesim.localization.ekf.observation import OBSERVATIONS
 
 if TYPE_CHECKING:
     from conesim.localization.cones.association import Association
-    from conesim.localization.cones.update import ConeUpdate
+    from conesim.localization.cones.update import ConeUpdate, StackedModel
     from conesim.localization.slam.book import MapBook
     from conesim.localization.slam.update import SlamUpdate
 
@@ -156,12 +157,6 @@ def propagate(snap: Snapshot, t: float, step: m.MotionStep) -> tuple[FloatArray,
     dt = t - snap.t
     if dt <= 0.0:
         return snap.x, snap.P
-    nv = step.model.layout.n
-    if len(snap.x) > nv:  # landmarks in the state (SLAM)
-        xv, f, q = step(snap.x[:nv], snap.u, snap.u_cov, dt)
-        x1, p1 = augmented.predict(snap.x, snap.P, xv, f, q)
-        x1[m.YAW, 0] = m.wrap_yaw(x1.item(m.YAW))
-        return x1, p1
     x1, f, q = step(snap.x, snap.u, snap.u_cov, dt)
     x1[m.YAW, 0] = m.wrap_yaw(x1.item(m.YAW))
     return x1, kernels.symmetrised(np.dot(f, snap.P).dot(f.T) + q)
@@ -176,8 +171,9 @@ class FusionEkf:
             :mod:`localization.cones`): each ``ConeDetections`` scan then
             updates the pose; or the map built while driving (``slam``
             mode, :mod:`localization.slam`): the landmarks then join the
-            state after the vehicle's, and the Kalman steps are the
-            structured ones of :mod:`.augmented`; None ignores the scans.
+            state after the vehicle's, held beside filterpy's vehicle
+            block in :mod:`.augmented`'s compressed form; None ignores the
+            scans.
 
     Attributes:
         config: the settings.
@@ -226,6 +222,7 @@ class FusionEkf:
         self._stale_in_row = 0  # messages in a row rejected as too old or too new
         self._estimates: dict[float | None, tuple[Snapshot, Estimate]] = {}
         self._book: MapBook | None = None if self._slam is None else self._slam.empty_book()
+        self._map: MapState | None = None if self._slam is None else MapState.empty(self.layout.n)
 
     @property
     def health(self) -> Health:
@@ -243,13 +240,8 @@ class FusionEkf:
             return None
         self._replay_deferred()
         snap = self._history.latest
-        assert snap.book is not None
-        nv = self.layout.n
-        xy = snap.x[nv:, 0].reshape(-1, 2)
-        var = snap.P[nv:, nv:]
-        idx = np.arange(len(xy))
-        cov = var.reshape(len(xy), 2, len(xy), 2)[idx, :, idx, :]
-        return xy.copy(), np.array(cov), snap.book
+        assert snap.book is not None and snap.map is not None
+        return snap.map.x.reshape(-1, 2).copy(), np.array(snap.map.blocks()), snap.book
 
     @property
     def initialised(self) -> bool:
@@ -354,17 +346,11 @@ class FusionEkf:
         x, p = propagate(snap, t, self._step)
         yaw_rate = snap.u.item(0) - x.item(m.GYRO_BIAS)
         # x, p: the snapshot's (read-only) arrays or new ones only this estimate holds.
-        est = Estimate.from_state(t, x, p, yaw_rate, self._names(len(x)), copy=False)
+        est = Estimate.from_state(t, x, p, yaw_rate, self.layout.names, copy=False)
         if len(self._estimates) >= ESTIMATE_CACHE_SIZE:
             self._estimates.clear()
         self._estimates[stamp] = (snap, est)
         return est
-
-    def _names(self, n: int) -> tuple[str, ...]:
-        """The state's names, landmarks (``landmark_<j>_e``, ``_n``) after the vehicle's."""
-        names = self.layout.names
-        extra = range((n - len(names)) // 2)
-        return names + tuple(f"landmark_{j}_{a}" for j in extra for a in ("e", "n"))
 
     # -- initialisation ----------------------------------------------------------------------
 
@@ -404,7 +390,7 @@ class FusionEkf:
         imus = [q for q in self._pending if q.sensor == Sensor.IMU and q.stamp <= fix.stamp]
         u, u_cov = (imus[-1].z, imus[-1].cov) if imus else (NO_IMU_INPUT, NO_IMU_COV)
         x, p = self._initial_state(fix, heading, wheel)
-        base = Snapshot(fix.stamp, _freeze(x), _freeze(p), u, u_cov, self._book)
+        base = Snapshot(fix.stamp, _freeze(x), _freeze(p), u, u_cov, self._book, self._map)
         history = History(base, self.config.history_window)
         self._history = history
         self._restore(base)
@@ -586,13 +572,10 @@ class FusionEkf:
         if dt <= 0.0:
             return
         ekf = self._ekf
-        if self._slam is None:
-            ekf.x_next, ekf.F, ekf.Q = self._step(ekf.x, self._u, self._u_cov, dt)
-            ekf.predict(u=self._u)
-        else:
-            nv = self.layout.n
-            xv, f, q = self._step(ekf.x[:nv], self._u, self._u_cov, dt)
-            ekf.x, ekf.P = augmented.predict(ekf.x, ekf.P, xv, f, q)
+        ekf.x_next, ekf.F, ekf.Q = self._step(ekf.x, self._u, self._u_cov, dt)
+        ekf.predict(u=self._u)
+        if self._map is not None:
+            self._map = augmented.predicted(self._map, ekf.F)
         self._tidy()
         self._t = t
 
@@ -602,9 +585,7 @@ class FusionEkf:
             return self._update_cones(meas)
         ekf = self._ekf
         hx, jac, y = self._observe(meas, ekf.x)
-        nv = jac.shape[1]  # the vehicle's states: fewer than the state's with landmarks
-        p = ekf.P if nv == len(ekf.P) else ekf.P[:nv, :nv]
-        s = np.dot(jac, p).dot(jac.T) + meas.cov
+        s = np.dot(jac, ekf.P).dot(jac.T) + meas.cov
         nis = _nis(y, s)
         dof = y.shape[0]
         if not nis <= self._gates[dof]:
@@ -617,16 +598,17 @@ class FusionEkf:
     def _correct(
         self, z: FloatArray, hx: FloatArray, jac: FloatArray, cov: FloatArray, y: FloatArray
     ) -> None:
-        """The Kalman update with a gated measurement: filterpy's, or with landmarks in the
-        state (``slam``) the structured one (:mod:`.augmented`, H over the first columns)."""
+        """The Kalman update with a gated measurement of the vehicle: filterpy's; with
+        landmarks (``slam``), then the map's part from its gain (:func:`.augmented.measured`)."""
         ekf = self._ekf
-        if self._slam is None:
-            ekf.update(z, lambda _x: jac, lambda _x: hx, R=cov, residual=lambda _z, _h: y)
-        else:
-            book = self._book
-            fixed = self.layout.n if book is not None and book.closed else None
-            ekf.x, ekf.P = augmented.update(ekf.x, ekf.P, y, jac, cov, fixed=fixed)
+        ekf.update(z, lambda _x: jac, lambda _x: hx, R=cov, residual=lambda _z, _h: y)
+        if self._map is not None:
+            self._map = augmented.measured(self._map, jac, ekf.K, ekf.SI, y, frozen=self._frozen())
         self._tidy()
+
+    def _frozen(self) -> bool:
+        """Whether the map is frozen (``slam``, the loop closed): the landmarks stay put."""
+        return self._book is not None and self._book.closed
 
     def _update_cones(self, meas: Measurement) -> UpdateResult:
         """Associate a cone scan with the map, gate the set by its joint NIS, apply it;
@@ -637,32 +619,45 @@ class FusionEkf:
             cones = self._cones
             assert cones is not None  # cone measurements are made only with a map
             found = cones.associate(ekf.x, ekf.P, meas, self.layout)
-            return self._scan_update(meas, found, cones)
-        book = self._book
-        assert book is not None
-        found = slam.associate(ekf.x, ekf.P, meas, self.layout, book)
-        result = self._scan_update(meas, found, slam)
-        ekf.x, ekf.P, self._book = slam.map_step(
-            ekf.x, ekf.P, meas, found, used=result.accepted, book=book, layout=self.layout
+            model = cones.model(ekf.x, meas, found, self.layout) if len(found) else None
+            return self._scan_update(meas, found, cones, model)
+        book, lmap = self._book, self._map
+        assert book is not None and lmap is not None
+        found = slam.associate(ekf.x, ekf.P, lmap, meas, book)
+        model = slam.model(ekf.x, lmap, meas, found) if len(found) else None
+        result = self._scan_update(meas, found, slam, model)
+        assert self._map is not None
+        self._map, self._book = slam.map_step(
+            ekf.x, ekf.P, self._map, meas, found, used=result.accepted, book=book
         )
         return result
 
     def _scan_update(
-        self, meas: Measurement, found: Association, cones: ConeUpdate | SlamUpdate
+        self,
+        meas: Measurement,
+        found: Association,
+        cones: ConeUpdate | SlamUpdate,
+        model: StackedModel | None,
     ) -> UpdateResult:
-        """Gate a scan's associated detections by their joint NIS and apply them."""
+        """Gate a scan's associated detections (their ``model``, None without any) by their
+        joint NIS and apply them."""
         ekf = self._ekf
         counts = found.counts
-        if not len(found):
+        if model is None:
             detail = f"none of {len(meas.z)} detections associated"
             self._health.reject(Sensor.CONES, RejectReason.NO_ASSOCIATION, meas.stamp, detail)
             return UpdateResult(
                 Sensor.CONES, meas.stamp, False, RejectReason.NO_ASSOCIATION, cones=counts
             )
-        model = cones.model(ekf.x, meas, found, self.layout)
         jac = model.jacobian
         y = model.z - model.hx
-        s = np.dot(jac, ekf.P).dot(jac.T) + model.cov
+        terms = None
+        if self._map is None:
+            s = np.dot(jac, ekf.P).dot(jac.T) + model.cov
+        else:  # H over the vehicle and the matched landmarks' entries
+            rows = augmented.entries(found.landmarks)
+            terms = augmented.scan_terms(ekf.P, self._map, jac, rows, model.cov)
+            s = terms.s
         nis = float(np.dot(y.T, np.linalg.solve(s, y)).item())
         dof = y.shape[0]
         gate = cones.joint_gate(dof)
@@ -677,7 +672,14 @@ class FusionEkf:
         counts.nis_sum, counts.dof_sum = nis, dof
         lo, hi = cones.nis_band(dof)
         counts.nis_in_band = int(lo <= nis <= hi)
-        self._correct(model.z, model.hx, jac, model.cov, y)
+        if terms is None:
+            self._correct(model.z, model.hx, jac, model.cov, y)
+        else:
+            assert self._map is not None
+            ekf.x, ekf.P, self._map = augmented.scan_update(
+                ekf.x, ekf.P, self._map, y, terms, frozen=self._frozen()
+            )
+            self._tidy()
         return UpdateResult(Sensor.CONES, meas.stamp, True, None, nis, dof, counts)
 
     def _observe(
@@ -696,17 +698,17 @@ class FusionEkf:
         return hx, jac, obs.residual(meas.z, hx)
 
     def _tidy(self) -> None:
-        """Wrap yaw and re-symmetrise P after a predict or an update (both new arrays;
-        the structured steps of ``slam`` return P symmetric already)."""
+        """Wrap yaw and re-symmetrise P after a predict or an update (both new arrays)."""
         ekf = self._ekf
         ekf.x[m.YAW, 0] = m.wrap_yaw(ekf.x.item(m.YAW))
-        if self._slam is None:
-            ekf.P = kernels.symmetrised(ekf.P)  # 0.5 * (P + P'), compiled
+        ekf.P = kernels.symmetrised(ekf.P)  # 0.5 * (P + P'), compiled
 
     def _snapshot(self) -> Snapshot:
         """The filter's state, sharing its arrays (made read-only)."""
         ekf = self._ekf
-        return Snapshot(self._t, _freeze(ekf.x), _freeze(ekf.P), self._u, self._u_cov, self._book)
+        return Snapshot(
+            self._t, _freeze(ekf.x), _freeze(ekf.P), self._u, self._u_cov, self._book, self._map
+        )
 
     def _restore(self, snap: Snapshot) -> None:
         """Load a snapshot into the filter (its arrays are replaced, never written, from here)."""
@@ -716,3 +718,4 @@ class FusionEkf:
         self._u = snap.u
         self._u_cov = snap.u_cov
         self._book = snap.book
+        self._map = snap.map

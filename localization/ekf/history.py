@@ -23,6 +23,7 @@ from typing import Any, Final, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from conesim.localization.ekf.augmented import MapState
 from conesim.localization.ekf.health import ConeCounts, RejectReason, Sensor
 from conesim.localization.ekf.measurements import Measurement
 
@@ -52,6 +53,8 @@ class Snapshot(NamedTuple):
         u_cov: its per-sample covariance, (3, 3).
         book: the map's bookkeeping when the filter builds a map
             (``localization.slam.book.MapBook``, immutable), else None.
+        map: the landmarks' part of the state then (``x`` and ``P`` are the
+            vehicle's; :class:`~.augmented.MapState`, immutable), else None.
     """
 
     t: float
@@ -60,6 +63,7 @@ class Snapshot(NamedTuple):
     u: FloatArray
     u_cov: FloatArray
     book: Any = None
+    map: MapState | None = None
 
 
 @dataclass(slots=True)

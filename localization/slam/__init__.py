@@ -6,10 +6,12 @@ EKF with GPS, heading, wheel speed and the IMU, late messages replayed), and
 a track has a few hundred cones, so the landmarks join its state (n of a few
 hundred) and every sensor keeps one model, one gate and one set of
 counters; a second estimator would need its own copy of each, and a new
-dependency. The cost of the dense covariance is kept at O(n^2) per update
-by the structured Kalman steps (``localization.ekf.augmented``); the map's
-cross-correlations with the pose stay, so the cone updates' NIS stays honest
-(measured in ``benchmarks/bench_cone_localization.py``).
+dependency. The landmarks' covariance is held beside filterpy's vehicle
+block in a compressed form (``localization.ekf.augmented``): the fixes,
+headings, wheel speeds and IMU samples between two scans cost what they
+cost without a map, and a scan O(L) once the map is frozen, O(L^2) while it
+is built. The map's cross-correlations with the pose stay, so the cone
+updates' NIS stays honest (measured in ``benchmarks/bench_slam.py``).
 
 The map's frame is the start's: the car starts on the track's start pose
 (a track asset, as the global path is) to ``start_sigma``, not at its first

@@ -106,12 +106,16 @@ class MapBook:
             self.size, len(self.cand_seen), self.pruned, self.confirmed, self.closed
         )
 
-    def labels(self) -> list[str]:
-        """Each landmark's colour: the majority of its votes, or ``unknown``."""
+    def classes(self) -> IntArray:
+        """Each landmark's colour class: the majority of its votes (ties to the first), or
+        -1 without votes, (L,)."""
         best = np.argmax(self.votes, axis=1)
-        has = self.votes.max(axis=1, initial=0.0) > 0.0
-        pairs = zip(best.tolist(), has.tolist(), strict=True)
-        return [LABELS[b] if h else "unknown" for b, h in pairs]
+        best[~self.votes.any(axis=1)] = -1  # votes are counts, >= 0
+        return best
+
+    def labels(self) -> list[str]:
+        """Each landmark's colour (:meth:`classes`' names, ``unknown`` for -1)."""
+        return [LABELS[c] if c >= 0 else "unknown" for c in self.classes().tolist()]
 
     def counted(self, matched: IntArray, classes: IntArray | None, missed: IntArray) -> MapBook:
         """Landmarks ``matched`` (with their detections' ``classes``, (a,)) and ``missed``."""

@@ -1,7 +1,7 @@
 """The step the fusion EKF calls for a cone scan when it builds the map: EKF-SLAM.
 
-Each scan, with the prior (x, P) whose rows after the vehicle's are the
-landmarks (``localization.ekf.augmented``):
+Each scan, with the prior: the vehicle's (x, P) and the landmarks' part
+of the state beside it (``localization.ekf.augmented.MapState``):
 
 1. **association**, the map mode's (``localization.cones.association``),
    against the landmarks as they stand in the state, each pair gated with
@@ -38,15 +38,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from conesim.core.pose import Pose2D
-from conesim.localization.cones.association import Association, associate
+from conesim.localization.cones.association import Association, StateCones, associate
 from conesim.localization.cones.config import ConeUpdateConfig
 from conesim.localization.cones.landmarks import LandmarkMap, colour_classes
 from conesim.localization.cones.observation import block_diagonal, h_cones, jacob_h_cones
 from conesim.localization.cones.update import ScanUpdate, StackedModel
 from conesim.localization.ekf import augmented
+from conesim.localization.ekf.augmented import MapState
 from conesim.localization.ekf.health import ConeCounts
 from conesim.localization.ekf.measurements import Measurement
-from conesim.localization.ekf.model import YAW, StateLayout, X, Y
+from conesim.localization.ekf.model import YAW, X, Y
 from conesim.localization.slam.book import MapBook
 from conesim.localization.slam.config import SlamConfig
 
@@ -77,43 +78,56 @@ class SlamUpdate(ScanUpdate):
         super().__init__(dataclasses.replace(cfg, map_sigma=0.0, map_bias_sigma=0.0))
         self.slam = slam or SlamConfig()
         self.start = start
+        self._last_map: tuple[FloatArray, LandmarkMap] | None = None
 
     def empty_book(self) -> MapBook:
         """The bookkeeping of an empty map."""
         return MapBook.empty()
 
-    def landmark_map(self, x: FloatArray, layout: StateLayout, book: MapBook) -> LandmarkMap | None:
-        """The landmarks as they stand in ``x``, or None without any."""
+    def landmark_map(self, lmap: MapState, book: MapBook) -> LandmarkMap | None:
+        """The landmarks as they stand in the state, or None without any (the last one
+        again while the positions and colours are the same: the frozen map's)."""
         if not book.size:
             return None
-        return LandmarkMap(x[layout.n :, 0].reshape(-1, 2), book.labels())
+        classes = book.classes()
+        last = self._last_map
+        if last is not None and last[0] is lmap.x and np.array_equal(last[1].classes, classes):
+            return last[1]
+        cones = LandmarkMap(lmap.x.reshape(-1, 2), classes)
+        self._last_map = (lmap.x, cones)
+        return cones
 
     def associate(
-        self, x: FloatArray, p: FloatArray, meas: Measurement, layout: StateLayout, book: MapBook
+        self, x: FloatArray, p: FloatArray, lmap: MapState, meas: Measurement, book: MapBook
     ) -> Association:
-        """Match the scan's detections to the landmarks in the prior (x, P)."""
+        """Match the scan's detections to the landmarks in the prior (x, P_vv and the map's
+        part ``lmap``)."""
         classes = None if meas.labels is None else colour_classes(meas.labels)
-        lmap = self.landmark_map(x, layout, book)
-        if lmap is None:
+        cones = self.landmark_map(lmap, book)
+        if cones is None:
             k = len(meas.z)
             none = np.zeros(0, dtype=np.intp)
             counts = ConeCounts(scans=1, false_positives=k)
             return Association(none, none, counts, none, np.arange(k, dtype=np.intp))
+        n = lmap.size
+        cross = lmap.cross()[:, augmented.POSE].reshape(n, 2, 3).transpose(0, 2, 1)
         return associate(
-            x, p, meas.z, meas.cov, classes=classes, lmap=lmap, cfg=self.config,
-            gate=self.pair_gate, landmarks=layout.n,
+            x, p, meas.z, meas.cov, classes=classes, lmap=cones, cfg=self.config,
+            gate=self.pair_gate, landmarks=StateCones(cross, lmap.blocks()),
         )  # fmt: skip
 
     def model(
-        self, x: FloatArray, meas: Measurement, found: Association, layout: StateLayout
+        self, x: FloatArray, lmap: MapState, meas: Measurement, found: Association
     ) -> StackedModel:
-        """z, h(x), H and R of the associated detections, the landmarks' columns in H."""
-        columns = layout.n + 2 * found.landmarks
-        cones = np.column_stack([x[columns, 0], x[columns + 1, 0]])
+        """z, h(x), H and R of the associated detections, with ``x`` the vehicle's state: H
+        over its states and then each matched landmark's two (``augmented.scan_terms``)."""
+        cones = lmap.x.reshape(-1, 2)[found.landmarks]
+        nv = len(x)
+        columns = nv + 2 * np.arange(len(cones), dtype=np.intp)
         return StackedModel(
             z=meas.z[found.detections].reshape(-1, 1),
             hx=h_cones(x, cones, self.config.sensor_offset),
-            jacobian=jacob_h_cones(x, cones, len(x), columns=columns),
+            jacobian=jacob_h_cones(x, cones, nv + 2 * len(cones), columns=columns),
             cov=block_diagonal(meas.cov[found.detections]),
         )
 
@@ -121,18 +135,19 @@ class SlamUpdate(ScanUpdate):
         self,
         x: FloatArray,
         p: FloatArray,
+        lmap: MapState,
         meas: Measurement,
         found: Association,
         *,
         used: bool,
         book: MapBook,
-        layout: StateLayout,
-    ) -> tuple[FloatArray, FloatArray, MapBook]:
-        """Step 3 (module docstring) after the scan's update (``used``: it was applied).
+    ) -> tuple[MapState, MapBook]:
+        """Step 3 (module docstring) after the scan's update (``used``: it was applied), with
+        the vehicle's x and P_vv.
 
         Returns:
-            (x, P, book) with landmarks added or removed; the given arrays
-            when nothing changed.
+            (the map's part, the book) with landmarks added or removed; the
+            given map's part when nothing changed.
         """
         cfg = self.slam
         classes = None if meas.labels is None else colour_classes(meas.labels)
@@ -142,14 +157,14 @@ class SlamUpdate(ScanUpdate):
         start = None if self.start is None else np.array([self.start.x, self.start.y])
         book = book.moved(np.array([x.item(X), x.item(Y)]), start, cfg)
         if book.closed:
-            return x, p, book
+            return lmap, book
         stale = book.stale(cfg)
         if len(stale):
-            x, p = augmented.remove_landmarks(x, p, layout.n, stale)
+            lmap = augmented.remove_landmarks(lmap, stale)
             book = book.without(stale)
         fresh = found.unmatched
         if found.counts.scans_gated:  # a gated scan's pose is in doubt
-            return x, p, book
+            return lmap, book
         yaw = x.item(YAW)
         c, s = math.cos(yaw), math.sin(yaw)
         rel = meas.z[fresh] + np.asarray(self.config.sensor_offset)
@@ -162,8 +177,8 @@ class SlamUpdate(ScanUpdate):
         confirm, votes = confirm[:room], votes[:room]
         if len(confirm):
             rows = fresh[confirm]
-            x, p = augmented.add_landmarks(
-                x, p, meas.z[rows], meas.cov[rows], self.config.sensor_offset
+            lmap = augmented.add_landmarks(
+                x, p, lmap, meas.z[rows], meas.cov[rows], offset=self.config.sensor_offset
             )
             book = book.added(votes)
-        return x, p, book
+        return lmap, book

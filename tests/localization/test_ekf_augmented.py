@@ -1,74 +1,136 @@
-"""The structured Kalman steps of a state with landmarks against the dense formulas."""
+"""The map's compressed Kalman steps against the dense formulas (``slam_reference``), to 1e-9."""
 
 from __future__ import annotations
 
 import math
 
 import numpy as np
+from filterpy.kalman import ExtendedKalmanFilter
 from numpy.testing import assert_allclose
 
-from conesim.localization.ekf import augmented
+from conesim.localization.ekf import augmented, kernels
+from conesim.localization.ekf.augmented import MapState
+from tests.localization import slam_reference as ref
 
 NV = 7  # vehicle states
 L = 3  # landmarks
+TOL = 1e-9
 
 
-def _state(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    n = NV + 2 * L
+def _state(rng: np.random.Generator, landmarks: int = L) -> tuple[np.ndarray, np.ndarray]:
+    n = NV + 2 * landmarks
     a = rng.normal(size=(n, n))
     return rng.normal(size=(n, 1)), a @ a.T / n + 0.1 * np.eye(n)
 
 
-def test_predict_is_the_dense_f_p_f_plus_q() -> None:
-    """With F = blockdiag(F_v, I) and Q = blockdiag(Q_v, 0): the same x and P to 1e-12."""
-    rng = np.random.default_rng(0)
-    x, p = _state(rng)
+def _split(x: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, MapState]:
+    """(x_v, P_vv, the map's part) of a dense state, as the filter holds it."""
+    ms = MapState(x[NV:].copy(), p[NV:, :NV].copy(), None, p[NV:, NV:].copy(), None)
+    return x[:NV].copy(), p[:NV, :NV].copy(), ms
+
+
+def _assert_dense(xv: np.ndarray, pvv: np.ndarray, ms: MapState, x: np.ndarray, p: np.ndarray):
+    x1, p1 = augmented.dense(xv, pvv, ms)
+    assert_allclose(x1, x, rtol=0, atol=TOL)
+    assert_allclose(p1, p, rtol=0, atol=TOL)
+
+
+def _predict(rng: np.random.Generator, xv: np.ndarray, pvv: np.ndarray, ms: MapState):
+    """A random motion step: filterpy's P F' ... on the vehicle, the map's part after it,
+    and the same step's (f(x_v), F, Q)."""
     f = np.eye(NV) + 0.1 * rng.normal(size=(NV, NV))
     q = 0.01 * np.eye(NV)
-    xv = rng.normal(size=(NV, 1))
-    x1, p1 = augmented.predict(x, p, xv, f, q)
-    big_f = np.eye(len(x))
-    big_f[:NV, :NV] = f
-    big_q = np.zeros_like(p)
-    big_q[:NV, :NV] = q
-    assert_allclose(x1, np.vstack([xv, x[NV:]]), atol=0)
-    assert_allclose(p1, big_f @ p @ big_f.T + big_q, atol=1e-12)
+    xv1 = rng.normal(size=(NV, 1))
+    return xv1, f @ pvv @ f.T + q, augmented.predicted(ms, f), (xv1, f, q)
 
 
-def test_update_is_the_joseph_form() -> None:
-    """A GPS-like measurement of x, y (H over the first 2 columns): the Joseph form's P
-    and the gain's x, to 1e-12."""
+def _vehicle_update(
+    xv: np.ndarray, pvv: np.ndarray, ms: MapState, h: np.ndarray, y: np.ndarray, *, frozen: bool
+):
+    """filterpy's update of the vehicle with residual ``y``, then the map's part from its gain."""
+    ekf = ExtendedKalmanFilter(dim_x=NV, dim_z=len(y))
+    ekf.x, ekf.P = xv, pvv
+    r = np.diag(np.full(len(y), 0.04))
+    ekf.update(y, lambda _x: h, lambda _x: np.zeros_like(y), R=r)
+    return ekf.x, ekf.P, augmented.measured(ms, h, ekf.K, ekf.SI, y, frozen=frozen), r
+
+
+def test_predict_then_a_fix_is_the_dense_joseph_form() -> None:
+    """Predict (F = blockdiag(F_v, I)), then a fix of x, y (H over the vehicle): the
+    compressed state's dense x and P are the Joseph form's on the whole state, to 1e-9;
+    twice, so T and C are products of steps."""
     rng = np.random.default_rng(1)
     x, p = _state(rng)
-    h = np.zeros((2, 2))
+    xv, pvv, ms = _split(x, p)
+    h = np.zeros((2, NV))
     h[0, 0] = h[1, 1] = 1.0
-    r = np.diag([0.04, 0.09])
-    y = np.array([[0.3], [-0.2]])
-    x1, p1 = augmented.update(x, p, y, h, r)
-    big_h = np.zeros((2, len(x)))
-    big_h[:, :2] = h
-    k = p @ big_h.T @ np.linalg.inv(big_h @ p @ big_h.T + r)
-    ikh = np.eye(len(x)) - k @ big_h
-    assert_allclose(x1, x + k @ y, atol=1e-12)
-    assert_allclose(p1, ikh @ p @ ikh.T + k @ r @ k.T, atol=1e-12)
+    for _ in range(2):
+        xv, pvv, ms, step = _predict(rng, xv, pvv, ms)
+        x, p = ref.predict(x, p, *step)
+        _assert_dense(xv, pvv, ms, x, p)
+        y = rng.normal(size=(2, 1))
+        xv, pvv, ms, r = _vehicle_update(xv, pvv, ms, h, y, frozen=False)
+        x, p = ref.update(x, p, y, np.hstack([h, np.zeros((2, 2 * L))]), r)
+        _assert_dense(xv, pvv, ms, x, p)
+    assert ms.t is not None and ms.c is not None  # held compressed
 
 
-def test_schmidt_update_holds_the_landmarks() -> None:
-    """``fixed=NV``: the landmarks' means and covariance stay; the rest is the Joseph form
-    with their gain zeroed, to 1e-12."""
+def test_frozen_map_takes_the_schmidt_update() -> None:
+    """With the map frozen a heading update leaves the landmarks' means and P_mm as they
+    were; the rest is the Joseph form with their gain zeroed, to 1e-9."""
     rng = np.random.default_rng(2)
     x, p = _state(rng)
-    big_h = rng.normal(size=(2, len(x)))
-    r = np.diag([0.01, 0.01])
-    y = np.array([[0.1], [0.05]])
-    x1, p1 = augmented.update(x, p, y, big_h, r, fixed=NV)
-    k = p @ big_h.T @ np.linalg.inv(big_h @ p @ big_h.T + r)
-    k[NV:] = 0.0
-    ikh = np.eye(len(x)) - k @ big_h
-    assert_allclose(x1[NV:], x[NV:], atol=0)
-    assert_allclose(p1[NV:, NV:], p[NV:, NV:], atol=1e-15)
-    assert_allclose(x1, x + k @ y, atol=1e-12)
-    assert_allclose(p1, ikh @ p @ ikh.T + k @ r @ k.T, atol=1e-12)
+    xv, pvv, ms = _split(x, p)
+    h = np.zeros((1, NV))
+    h[0, 2] = 1.0
+    y = np.array([[0.05]])
+    xv, pvv, ms1, r = _vehicle_update(xv, pvv, ms, h, y, frozen=True)
+    x1, p1 = ref.update(x, p, y, np.hstack([h, np.zeros((1, 2 * L))]), r, fixed=NV)
+    _assert_dense(xv, pvv, ms1, x1, p1)
+    assert ms1.x is ms.x and ms1.m is ms.m and ms1.c is None
+
+
+def _scan(rng: np.random.Generator, landmarks: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """A random H over the pose (x, y, yaw) and each of ``landmarks``' (east, north), in the
+    compact layout of ``scan_terms`` (m, NV + 2a) and on the whole state (m, n)."""
+    a = len(landmarks)
+    h = np.zeros((2 * a, NV + 2 * a))
+    h[:, :3] = rng.normal(size=(2 * a, 3))
+    h[:, NV:] = np.kron(np.eye(a), rng.normal(size=(2, 2)))
+    big = np.zeros((2 * a, NV + 2 * L))
+    big[:, :NV] = h[:, :NV]
+    big[:, NV + augmented.entries(np.array(landmarks))] = h[:, NV:]
+    return h, big
+
+
+def test_scan_update_is_the_dense_update_while_building_and_frozen() -> None:
+    """A scan of landmarks 2 and 0 after a predict and a fix (T and C held): S is H P H' + R
+    and the state after it the dense Joseph form's, built (all gains) or frozen (the
+    landmarks' gain zero), to 1e-9."""
+    for frozen in (False, True):
+        rng = np.random.default_rng(3)
+        x, p = _state(rng)
+        xv, pvv, ms = _split(x, p)
+        xv, pvv, ms, step = _predict(rng, xv, pvv, ms)
+        x, p = ref.predict(x, p, *step)
+        hv = np.zeros((2, NV))
+        hv[0, 0] = hv[1, 1] = 1.0
+        y = rng.normal(size=(2, 1))
+        xv, pvv, ms, r = _vehicle_update(xv, pvv, ms, hv, y, frozen=frozen)
+        x, p = ref.update(x, p, y, np.hstack([hv, np.zeros((2, 2 * L))]), r, fixed=None)
+        if frozen:  # the same prior as the building case's, frozen from here on
+            xv, pvv, ms = _split(x, p)
+        h, big = _scan(rng, [2, 0])
+        r = 0.01 * np.eye(4)
+        terms = augmented.scan_terms(pvv, ms, h, augmented.entries(np.array([2, 0])), r)
+        assert_allclose(terms.s, big @ p @ big.T + r, rtol=0, atol=TOL)
+        y = rng.normal(size=(4, 1))
+        xv, pvv, ms1 = augmented.scan_update(xv, pvv, ms, y, terms, frozen=frozen)
+        x, p = ref.update(x, p, y, big, r, fixed=NV if frozen else None)
+        _assert_dense(xv, pvv, ms1, x, p)
+        assert ms1.t is None and ms1.c is None  # written out
+        if frozen:
+            assert ms1.x is ms.x and ms1.m is ms.m
 
 
 def test_new_landmark_takes_the_linearised_covariance() -> None:
@@ -82,7 +144,8 @@ def test_new_landmark_takes_the_linearised_covariance() -> None:
     x[:3, 0] = (1.0, 2.0, math.radians(30.0))
     z = np.array([[5.0, 2.0]])
     rz = np.array([[[0.0025, 0.0004], [0.0004, 0.0016]]])
-    x1, p1 = augmented.add_landmarks(x, p, z, rz, (0.0, 0.0))
+    ms = augmented.add_landmarks(x, p, MapState.empty(n), z, rz, offset=(0.0, 0.0))
+    x1, p1 = augmented.dense(x, p, ms)
 
     def cone(xs: np.ndarray, zs: np.ndarray) -> np.ndarray:
         c, s = math.cos(xs[2, 0]), math.sin(xs[2, 0])
@@ -101,10 +164,73 @@ def test_new_landmark_takes_the_linearised_covariance() -> None:
 
 
 def test_removing_a_landmark_marginalises_it() -> None:
-    """Dropping landmark 1 of 3 leaves the other rows and columns as they were."""
+    """Dropping landmark 1 of 3 (with T and C held) leaves the other rows and columns of
+    the dense P as they were."""
     rng = np.random.default_rng(4)
     x, p = _state(rng)
-    x1, p1 = augmented.remove_landmarks(x, p, NV, np.array([1]))
-    keep = [*range(NV), NV, NV + 1, NV + 4, NV + 5]
-    assert_allclose(x1, x[keep], atol=0)
-    assert_allclose(p1, p[np.ix_(keep, keep)], atol=0)
+    xv, pvv, ms = _split(x, p)
+    xv, pvv, ms, step = _predict(rng, xv, pvv, ms)
+    x, p = ref.predict(x, p, *step)
+    ms1 = augmented.remove_landmarks(ms, np.array([1]))
+    _assert_dense(xv, pvv, ms1, *ref.remove_landmarks(x, p, NV, [1]))
+
+
+def test_a_drive_of_mixed_steps_matches_the_dense_filter() -> None:
+    """40 random steps (predicts, fixes, scans, landmarks added and one removed, the map frozen
+    half way) on the compressed state and on the dense one: the same x and P to 1e-9."""
+    rng = np.random.default_rng(5)
+    x, p = _state(rng)
+    p *= 0.01
+    xv, pvv, ms = _split(x, p)
+    h_fix = np.zeros((2, NV))
+    h_fix[0, 0] = h_fix[1, 1] = 1.0
+    for i in range(40):
+        frozen = i >= 20
+        kind = i % 5
+        size = len(ms.x) // 2
+        if kind in (0, 2):
+            xv, pvv, ms, step = _predict(rng, xv, pvv, ms)
+            x, p = ref.predict(x, p, *step)
+        elif kind == 1:
+            y = 0.1 * rng.normal(size=(2, 1))
+            xv, pvv, ms, r = _vehicle_update(xv, pvv, ms, h_fix, y, frozen=frozen)
+            big = np.hstack([h_fix, np.zeros((2, 2 * size))])
+            x, p = ref.update(x, p, y, big, r, fixed=NV if frozen else None)
+        elif kind == 3 and size >= 2:
+            seen = [size - 1, 0]
+            h = np.zeros((4, NV + 4))
+            h[:, :3] = rng.normal(size=(4, 3))
+            h[:, NV:] = np.kron(np.eye(2), rng.normal(size=(2, 2)))
+            big = np.zeros((4, NV + 2 * size))
+            big[:, :NV] = h[:, :NV]
+            big[:, NV + augmented.entries(np.array(seen))] = h[:, NV:]
+            r = 0.01 * np.eye(4)
+            y = 0.1 * rng.normal(size=(4, 1))
+            terms = augmented.scan_terms(pvv, ms, h, augmented.entries(np.array(seen)), r)
+            xv, pvv, ms = augmented.scan_update(xv, pvv, ms, y, terms, frozen=frozen)
+            x, p = ref.update(x, p, y, big, r, fixed=NV if frozen else None)
+        elif kind == 4 and not frozen:
+            z = rng.normal(size=(2, 2)) + np.array([5.0, 0.0])
+            rz = np.tile(0.01 * np.eye(2), (2, 1, 1))
+            ms = augmented.add_landmarks(xv, pvv, ms, z, rz, offset=(0.5, 0.1))
+            x, p = ref.add_landmarks(x, p, z, rz, (0.5, 0.1))
+            if i == 9:
+                ms = augmented.remove_landmarks(ms, np.array([1]))
+                x, p = ref.remove_landmarks(x, p, NV, [1])
+        _assert_dense(xv, pvv, ms, x, p)
+    assert len(ms.x) == 2 * (L + 2 * 4 - 1)  # 4 scans added 2 each, 1 removed
+
+
+def test_downdated_is_m_minus_u_v_exactly_symmetric() -> None:
+    """Worked: [[4, 1], [1, 3]] - [1; 2] [1, 2] = [[3, -1], [-1, -1]]; and on a 50 x 50
+    random case numpy's m - u v to 1e-12, with the result exactly symmetric."""
+    out = kernels.downdated(np.array([[4.0, 1.0], [1.0, 3.0]]), np.array([[1.0], [2.0]]),
+                            np.array([[1.0, 2.0]]))  # fmt: skip
+    assert_allclose(out, [[3.0, -1.0], [-1.0, -1.0]], rtol=0, atol=0)
+    rng = np.random.default_rng(6)
+    m, u, w = rng.normal(size=(50, 50)), rng.normal(size=(50, 6)), rng.normal(size=(6, 6))
+    m, w = m + m.T, w + w.T
+    v = w @ u.T
+    out = kernels.downdated(m, u, v)
+    assert np.array_equal(out, out.T)
+    assert_allclose(out, m - u @ v, rtol=0, atol=1e-12)

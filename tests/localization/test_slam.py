@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
+import pytest
 from numpy.testing import assert_allclose
 
 from conesim.core.messages import (
@@ -19,6 +21,7 @@ from conesim.core.messages import (
 from conesim.core.pose import Pose2D
 from conesim.envs.map_quality import map_quality
 from conesim.localization.cones import ConeUpdateConfig
+from conesim.localization.cones.landmarks import LandmarkMap
 from conesim.localization.ekf import EkfConfig, FusionEkf
 from conesim.localization.ekf.synthetic import (
     Path,
@@ -106,6 +109,37 @@ def test_same_seed_same_map() -> None:
     assert sa is not None and sb is not None
     assert len(sa[0]) > 5
     assert np.array_equal(sa[0], sb[0]) and np.array_equal(sa[1], sb[1])
+
+
+def test_compressed_map_gives_the_dense_filters_numbers() -> None:
+    """The ring's 17 s (the map built, the loop closed, then frozen), seed 3: the pose and
+    landmarks 0, 17 and 39 with landmark 17's covariance are the numbers the filter gave
+    with the whole (n, n) P in its state (commit 5e3939e), to 1e-9."""
+    ekf, _ = loop_run(3)
+    state = ekf.landmark_state()
+    assert state is not None
+    xy, cov, _ = state
+    est = ekf.estimate()
+    assert len(xy) == 40 and len(est.state) == 7  # the estimate: the vehicle's states
+    pose = [est.pose.x, est.pose.y, est.pose.yaw]
+    assert_allclose(pose, [7.94150393444832, 6.049959590898539, 2.2169620089395465], atol=1e-9)
+    assert_allclose(
+        np.diag(est.pose_covariance),
+        [0.001155356225893306, 0.0011172336806638565, 2.447901731276478e-07],
+        rtol=0, atol=1e-12,
+    )  # fmt: skip
+    assert_allclose(
+        xy[[0, 17, 39]],
+        [[7.972149650111921, 0.03818413525429518], [-0.04886936250521091, 8.026509598576984],
+         [-0.04935122773316097, -11.975021214861385]],
+        rtol=0, atol=1e-9,
+    )  # fmt: skip
+    assert_allclose(
+        cov[17],
+        [[0.0012200407493159584, 2.0852590938103596e-05],
+         [2.0852590938103596e-05, 0.0012150775358210249]],
+        rtol=0, atol=1e-12,
+    )  # fmt: skip
 
 
 def _static_filter(update: SlamUpdate) -> FusionEkf:
@@ -209,3 +243,22 @@ def test_book_candidates_confirm_after_three_sightings_and_vote_colours() -> Non
     assert book.labels() == ["blue"]
     book, _, _ = book.sighted(np.zeros((0, 2)), None, 0.2 + cfg.candidate_timeout + 0.01, cfg)
     assert len(book.cand_seen) == 0  # timed out
+
+
+def test_book_classes_are_the_vote_majority_and_make_the_landmark_map() -> None:
+    """Worked: votes (2 blue), (none), (1 yellow, 1 orange) are classes 0, -1 and 1 (a tie
+    goes to the first), the labels blue, unknown, yellow; a LandmarkMap takes the classes
+    as they are, and refuses a class outside -1..2."""
+    book = dataclasses.replace(
+        MapBook.empty(),
+        votes=np.array([[2.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 1.0, 1.0]]),
+        hits=np.ones(3, dtype=np.intp),
+        misses=np.zeros(3, dtype=np.intp),
+    )
+    assert book.classes().tolist() == [0, -1, 1]
+    assert book.labels() == ["blue", "unknown", "yellow"]
+    positions = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]])
+    lmap = LandmarkMap(positions, book.classes())
+    assert lmap.classes.tolist() == LandmarkMap(positions, book.labels()).classes.tolist()
+    with pytest.raises(ValueError, match="classes"):
+        LandmarkMap(positions, np.array([0, 1, 5]))
