@@ -3,10 +3,13 @@
 What a real car's software has, and nothing more: the frame tree (fed by
 localization), the global path, and the messages it receives.
 
-- Cone detections (10 Hz, ``/sorted_cones_time``) trigger
+- Cone detections (10 Hz, ``/sorted_cones_time``) get the cones of the
+  last scans they missed (``planner.cone_memory``), then trigger
   ``classify_cones_by_side`` at the detection's stamp (if the frame tree has
   no transform there yet, at the latest one, counted in ``tf_latest_count``)
-  and ``reference_path_planning`` with the latest transform, as in the ROS pipeline.
+  and ``reference_path_planning`` with the latest transform, as in the ROS
+  pipeline; a path that leaves the lane as the global path places it is
+  not taken (``off_lane_reason``, ``AutopilotConfig.lane_check_margin``).
   With ``speed_source = "global"`` the waypoints' speeds are then the
   global path's speed plan at their stations (``planner.global_speed``),
   limited to what the car reaches accelerating from its speed.
