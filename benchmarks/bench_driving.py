@@ -18,8 +18,9 @@ A seed that makes no track (the generator gives up on a few large ones)
 is left out, and said so. Seeds: the tests drive generated seeds below 100,
 tuning used seeds 1000-1339; the held-out report uses seeds 7000 on (the
 default), which were not looked at while tuning (5000-5199 were the
-held-out set of the planner before the cone memory, and were looked at). ``--set KEY=VALUE`` (as ``conesim run --set``)
-changes the base scenario, for a before / after comparison.
+held-out set of the planner before the cone memory, and were looked at).
+``--set KEY=VALUE`` (as ``conesim run --set``) changes the base scenario,
+for a before / after comparison.
 
 Run: ``.venv/bin/python benchmarks/bench_driving.py [--tracks N] [--first S]
 [--workers J] [--profiles ideal,rtk,harsh] [--out DIR] [--set KEY=VALUE]``
