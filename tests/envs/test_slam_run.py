@@ -106,3 +106,24 @@ def test_env_takes_slam() -> None:
     counts = ekf.health.landmarks
     assert counts is not None and counts.confirmed > 5
     env.close()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("track", ["autocross", "trackdrive"])
+def test_closed_loop_slam_nis_near_one(track: str) -> None:
+    """consumer GPS building the map, 2 laps: the cone updates' NIS per dof within
+    10 % of 1 and >= 85 % of the scans inside their 95 % band (as with a given
+    map, ``tests/localization/test_cones_monte_carlo.py``); every cone mapped,
+    none spurious, and the map's shape right to 5 cm per cone once the common
+    rotation and shift are taken out (measured 0.018 and 0.020 m)."""
+    r = run_scenario(track, sensors="consumer", localization="slam", laps=2)
+    counts = r.cone_associations
+    assert counts is not None
+    used = counts["scans"] - counts["scans_gated"]
+    assert 0.9 <= counts["nis_sum"] / counts["dof_sum"] <= 1.1
+    assert counts["nis_in_band"] / used >= 0.85
+    assert r.clean
+    quality = r.map_quality
+    assert quality is not None
+    assert quality["missed"] == 0 and quality["spurious"] == 0
+    assert quality["mean_error_aligned_m"] <= 0.05
