@@ -16,6 +16,7 @@ from conesim.envs.scenario_file import load_scenario, scenario_to_mapping
 from conesim.localization.slam import SlamConfig
 from conesim.sim.sensors import get_profile
 from conesim.tracks import load_track
+from tests.localization.cone_helpers import assert_closed_loop_nis
 
 
 def test_scenario_file_takes_slam_and_its_group(tmp_path: Path) -> None:
@@ -117,11 +118,7 @@ def test_closed_loop_slam_nis_near_one(track: str) -> None:
     none spurious, and the map's shape right to 5 cm per cone once the common
     rotation and shift are taken out (measured 0.018 and 0.020 m)."""
     r = run_scenario(track, sensors="consumer", localization="slam", laps=2)
-    counts = r.cone_associations
-    assert counts is not None
-    used = counts["scans"] - counts["scans_gated"]
-    assert 0.9 <= counts["nis_sum"] / counts["dof_sum"] <= 1.1
-    assert counts["nis_in_band"] / used >= 0.85
+    assert_closed_loop_nis(r.cone_associations)
     assert r.clean
     quality = r.map_quality
     assert quality is not None

@@ -67,3 +67,12 @@ def filter_at(
     ekf.process(HeadingStamped(Header(0.0, FRAME_REFERENCE), pose.yaw, sigma_yaw**2))
     assert ekf.initialised
     return ekf
+
+
+def assert_closed_loop_nis(counts: dict[str, float] | None) -> None:
+    """A closed loop's cone updates (``RunResult.cone_associations``): NIS per dof
+    within 10 % of 1, and >= 85 % of the scans used inside their 95 % band."""
+    assert counts is not None
+    used = counts["scans"] - counts["scans_gated"]
+    assert 0.9 <= counts["nis_sum"] / counts["dof_sum"] <= 1.1
+    assert counts["nis_in_band"] / used >= 0.85

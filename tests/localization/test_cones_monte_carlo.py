@@ -22,7 +22,14 @@ from scipy.stats import chi2
 from conesim.core.pose import Pose2D
 from conesim.envs.runner import run_scenario
 from conesim.localization.cones import ConeUpdate, ConeUpdateConfig, LandmarkMap
-from tests.localization.cone_helpers import filter_at, in_sensor, lane_map, noisy, scan
+from tests.localization.cone_helpers import (
+    assert_closed_loop_nis,
+    filter_at,
+    in_sensor,
+    lane_map,
+    noisy,
+    scan,
+)
 
 RUNS = 200
 SIGMA_XY = 0.3  # [m]
@@ -61,11 +68,7 @@ def test_closed_loop_cone_nis_near_one(track: str) -> None:
     """consumer GPS with the map, one lap: NIS per dof within 10 % of 1, >= 85 % of the
     scans in their band, the pose within 0.2 m and 0.5 deg (issue 16's targets)."""
     r = run_scenario(track, sensors="consumer", localization="cones", laps=1)
-    counts = r.cone_associations
-    assert counts is not None
-    used = counts["scans"] - counts["scans_gated"]
-    assert 0.9 <= counts["nis_sum"] / counts["dof_sum"] <= 1.1
-    assert counts["nis_in_band"] / used >= 0.85
+    assert_closed_loop_nis(r.cone_associations)
     assert r.clean
     assert r.localization_pos_rmse_m is not None and r.localization_pos_rmse_m <= 0.2
     assert r.localization_yaw_rmse_deg is not None and r.localization_yaw_rmse_deg <= 0.5
