@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from conesim.core.messages import CONE_COLOURS, ConeDetections, Header
+from conesim.core.messages import CONE_COLOURS, ConeDetections
 from conesim.localization.frames import Buffer
 from conesim.planner.config import ConeMemoryConfig
 from conesim.planner.geometry import FloatArray
@@ -115,7 +115,7 @@ class ConeMemory:
             colours = [CONE_COLOURS[int(k)] for k in codes]
         order = np.argsort(np.hypot(points[:, 0], points[:, 1]), kind="stable")
         return ConeDetections(
-            Header(message.header.stamp, message.header.frame_id),
+            message.header,
             points[order],
             None if colours is None else tuple(colours[int(i)] for i in order),
         )
