@@ -375,8 +375,11 @@ class SpeedProfileConfig(Settings):
     # generated tracks, seeds 1000-1019; 13 on 1; 12 on none).
     a_lat_max: float = 12.0  # [m/s^2]
     # fssim C_Down 1.903 N s^2/m^2 on 190 kg, times the tyre's 1.6: 0.016 1/m
-    # (11 m/s^2 more at 26 m/s); planned at 14 / 15.7 of it.
-    a_lat_aero: float = 0.0143  # [1/m]
+    # (11 m/s^2 more at 26 m/s), planned at the share a_lat_max takes of the
+    # static grip, 12 / 15.7: the same margin at every speed. At 14 / 15.7 of it
+    # the car braked at 16-17 m/s while turning at 16 of its 20 m/s^2 and ran
+    # wide (rtk, generated seeds 7196, 7028; 3004 and 3017 with cones).
+    a_lat_aero: float = 0.0122  # [1/m]
     a_drive: float = 3.0  # [m/s^2] EUFS +3
     a_brake: float = 8.0  # [m/s^2] planning margin below EUFS -10
     v_max: float = 25.0  # [m/s] below the car's ~29.7 m/s top speed

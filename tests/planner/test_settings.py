@@ -67,6 +67,6 @@ def test_speed_profile_groups_carry_the_config_s_values() -> None:
     assert (limits.curvature_window, limits.v_max, limits.lateral_jerk_max) == (2.0, 25.0, 60.0)
     passes = config.pass_settings
     assert passes == settings.PassSettings(
-        True, 3.0, 8.0, 12.0, 0.0143, horizon_stop=True, brake=True
+        True, 3.0, 8.0, 12.0, 0.0122, horizon_stop=True, brake=True
     )
     assert type(passes.friction_ellipse) is bool
