@@ -11,8 +11,12 @@ where the same command resumes an interrupted benchmark; runs already there
 are not run again, so give a new DIR after changing the code. Per profile
 it prints the clean share (all laps, no cone down or out, no off-track
 event), the flying lap (lap 2) against the track's ``limit_lap_time_s``
-(min, median, max over the clean runs), cones down or out per km driven,
-and the runs that were not clean.
+(min, median, max over the clean runs) and against the autopilot's own
+speed plan (``plan_lap_time``: the median), cones down or out per km
+driven, and the runs that were not clean. A last line says where the
+ratio to the limit comes from: the centreline driven at the car's limits
+(``centreline_lap_time_s``) and the autopilot's plan (the centreline at
+the planner's limits, ``SpeedProfileConfig``), each over the limit.
 
 A seed that makes no track (the generator gives up on a few large ones)
 is left out, and said so. Seeds: the tests drive generated seeds below 100,
@@ -38,12 +42,17 @@ from typing import Any
 
 import numpy as np
 
-from conesim.envs.scenario_file import Override, apply_override
+from conesim.envs.scenario_file import Override, apply_override, scenario_from_mapping
 from conesim.envs.sweep import run_sweep
 from conesim.envs.sweep_file import BASE_LABEL, load_sweep
 from conesim.envs.sweep_store import read_rows
 from conesim.envs.yaml_io import dump_yaml, parse_value
+from conesim.planner.config import AutopilotConfig, SpeedProfileConfig
+from conesim.planner.global_fit import smoothed_global_path
+from conesim.planner.global_speed import GlobalSpeedPlan
+from conesim.tracks import Track
 from conesim.tracks.generate import Size, TrackGenerationError, TrackSpec, generate_track
+from conesim.tracks.global_path import global_path_for_track
 
 SIZES: tuple[Size, ...] = ("small", "medium", "large")
 HARSH = {
@@ -109,25 +118,49 @@ def main() -> None:
         report(out, seeds, profiles, args)
 
 
-def track_lengths(seeds: range) -> dict[int, float]:
-    """Each seed's lap length [m], without the seeds that make no track (said on stdout)."""
-    lengths = {}
+def plan_lap_time(track: Track, config: SpeedProfileConfig) -> float:
+    """The autopilot's own speed plan's flying lap [s]: ``GlobalSpeedPlan`` (the
+    centreline at the planner's limits) on the global path as the autopilot
+    smooths it, timed as ds over the mean speed of each step."""
+    path = smoothed_global_path(
+        global_path_for_track(track), AutopilotConfig().global_path_min_scatter
+    )
+    plan = GlobalSpeedPlan(path, config)
+    v = 0.5 * (plan.speeds[1:] + plan.speeds[:-1])
+    return float(np.sum(np.diff(plan.stations) / v))
+
+
+def track_laps(seeds: range, config: SpeedProfileConfig) -> dict[int, tuple[float, float]]:
+    """Each seed's lap length [m] and ``plan_lap_time`` [s], without the seeds that
+    make no track (said on stdout)."""
+    laps = {}
     for s in seeds:
         try:
-            lengths[s] = generate_track(s, TrackSpec(size=SIZES[s % 3])).length_m
+            track = generate_track(s, TrackSpec(size=SIZES[s % 3]))
         except TrackGenerationError as exc:
             print(f"  left out: {exc}")
-    return lengths
+            continue
+        laps[s] = (track.length_m, plan_lap_time(track, config))
+    return laps
+
+
+def spread(values: list[float]) -> str:
+    """min, median and max of ``values``, or n/a."""
+    if not values:
+        return "n/a"
+    return f"{min(values):.3f} {float(np.median(values)):.3f} {max(values):.3f}"
 
 
 def report(out: Path, seeds: range, profiles: list[str], args: argparse.Namespace) -> None:
     """Run (or resume) the sweep into ``out`` and print the figures."""
-    lengths = track_lengths(seeds)
-    if not lengths:
+    sweep = sweep_file(list(seeds), profiles, args.set)
+    planning = scenario_from_mapping(sweep["base"]).autopilot_config().speed_profile
+    laps = track_laps(seeds, planning)
+    if not laps:
         print("  no track to drive")
         return
     spec_file = out.with_name(out.name + ".sweep.yaml")
-    spec_file.write_text(dump_yaml(sweep_file(list(lengths), profiles, args.set)))
+    spec_file.write_text(dump_yaml(sweep_file(list(laps), profiles, args.set)))
     done = run_sweep(
         load_sweep(spec_file), out, workers=args.workers, pictures="failed",
         stderr=sys.stderr, tty=sys.stderr.isatty(),
@@ -135,29 +168,30 @@ def report(out: Path, seeds: range, profiles: list[str], args: argparse.Namespac
     rows = [r for r in read_rows(out / "results.jsonl") if r["status"] == "ok"]
     extra = ", ".join(args.set) or "defaults"
     print(
-        f"driving clean, {len(lengths)} generated tracks, seeds {seeds.start}-{seeds.stop - 1} "
+        f"driving clean, {len(laps)} generated tracks, seeds {seeds.start}-{seeds.stop - 1} "
         f"(sizes by seed), 2 laps, fused localization, {extra}; {done.errors} errors"
     )
-    print(f"  {'profile':8s} runs  clean    lap 2 / limit (min med max)  DOO/km  not clean")
+    print(
+        f"  {'profile':8s} runs  clean    lap 2 / limit (min med max)  lap 2 / plan  "
+        "DOO/km  not clean"
+    )
+    yardsticks: dict[int, tuple[float, float]] = {}  # seed: (limit, centreline) [s]
     for profile in profiles:
         mine = [r for r in rows if profile_of(r) == profile]
         if not mine:
             continue
         clean = [r for r in mine if r["clean"]]
-        flying = []
+        flying, to_plan = [], []
         km = 0.0
         for r in mine:
             result = json.loads((out / "runs" / r["run_id"] / "result.json").read_text())
-            laps = result["lap_times_s"]
-            if r["clean"] and len(laps) >= 2:
-                flying.append(laps[1] / result["limit_lap_time_s"])
             seed = int(r["axes"]["track.generate.seed"])
-            km += lengths[seed] * (r["laps_completed"] + 0.5 * (not r["finished"])) / 1000.0
-        ratio = (
-            f"{min(flying):.3f} {float(np.median(flying)):.3f} {max(flying):.3f}"
-            if flying
-            else "n/a"
-        )
+            yardsticks[seed] = (result["limit_lap_time_s"], result["centreline_lap_time_s"])
+            times = result["lap_times_s"]
+            if r["clean"] and len(times) >= 2:
+                flying.append(times[1] / result["limit_lap_time_s"])
+                to_plan.append(times[1] / laps[seed][1])
+            km += laps[seed][0] * (r["laps_completed"] + 0.5 * (not r["finished"])) / 1000.0
         doo = sum(r["cones_down_or_out"] for r in mine)
         bad = ", ".join(
             f"{r['axes']['track.generate.seed']}:{r['end_reason']}/{r['cones_down_or_out']}"
@@ -165,9 +199,19 @@ def report(out: Path, seeds: range, profiles: list[str], args: argparse.Namespac
             if not r["clean"]
         )
         share = 100.0 * len(clean) / len(mine)
+        plan_ratio = f"{float(np.median(to_plan)):.3f}" if to_plan else "n/a"
         print(
-            f"  {profile:8s} {len(mine):4d} {share:5.1f} %  {ratio:27s}  {doo / km:6.2f}  "
-            f"{bad or '-'}"
+            f"  {profile:8s} {len(mine):4d} {share:5.1f} %  {spread(flying):27s}  "
+            f"{plan_ratio:>12s}  {doo / km:6.2f}  {bad or '-'}"
+        )
+    if yardsticks:
+        centre = [c / limit for limit, c in yardsticks.values()]
+        plan = [laps[seed][1] / limit for seed, (limit, _) in yardsticks.items()]
+        print(
+            f"  where lap 2 / limit comes from, over {len(yardsticks)} tracks (min med max): "
+            f"the centreline at the car's limits (QSS) / limit {spread(centre)}; the "
+            f"autopilot's speed plan (the centreline at the planner's limits) / limit "
+            f"{spread(plan)}"
         )
 
 
