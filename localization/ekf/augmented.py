@@ -209,16 +209,19 @@ def measured(
     """
     if not len(ms.x):
         return ms
-    th = h.T if ms.t is None else np.dot(ms.t, h.T)  # T H_v', (n_v, m)
-    t = -np.dot(th, gain.T)
-    if ms.t is None:
-        t[np.diag_indices_from(t)] += 1.0
+    t0 = ms.t
+    if t0 is None:  # T = I: T H_v' is H_v'
+        th = h.T
+        t = np.negative(np.dot(th, gain.T))
+        t.ravel()[:: len(t) + 1] += 1.0  # 1 - (H_v' K_v')_ii, as I - H_v' K_v'
     else:
-        t += ms.t
+        th = np.dot(t0, h.T)  # T H_v', (n_v, m)
+        t = t0 - np.dot(th, gain.T)  # the same rounding as -(T H_v' K_v') + T
     if frozen:
         return MapState(ms.x, ms.b, t, ms.m, ms.c)
     g = np.dot(th, s_inv)  # G = T H_v' S^-1
-    x = _frozen(ms.x + np.dot(ms.b, np.dot(g, y)))
+    x = ms.x + np.dot(ms.b, np.dot(g, y))
+    x.flags.writeable = False
     gsg = np.dot(g, th.T)  # G S G' = T H_v' S^-1 H_v T'
     return MapState(x, ms.b, t, ms.m, gsg if ms.c is None else ms.c + gsg)
 

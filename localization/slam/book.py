@@ -20,9 +20,8 @@ meets the book as it was before it, as it meets the state.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
-from typing import Final, TypeVar
+from typing import Any, Final, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -95,6 +94,25 @@ class MapBook:
         zf = _frozen(np.zeros(0))
         return cls(z2, zi, z3, zf, z3, zi, zi)
 
+    def _but(self, **changes: Any) -> MapBook:
+        """The book with ``changes``: ``dataclasses.replace`` without its look-up of the
+        fields on every call (a third of its time; each scan makes three or four books)."""
+        get = changes.get
+        return MapBook(
+            get("cand_xy", self.cand_xy),
+            get("cand_seen", self.cand_seen),
+            get("cand_votes", self.cand_votes),
+            get("cand_last", self.cand_last),
+            get("votes", self.votes),
+            get("hits", self.hits),
+            get("misses", self.misses),
+            get("confirmed", self.confirmed),
+            get("pruned", self.pruned),
+            get("closed", self.closed),
+            get("travelled", self.travelled),
+            get("last_xy", self.last_xy),
+        )
+
     @property
     def size(self) -> int:
         """Landmarks in the map (in the state)."""
@@ -125,9 +143,7 @@ class MapBook:
         hits[matched] += 1
         misses = self.misses.copy()
         misses[missed] += 1
-        return dataclasses.replace(
-            self, votes=_frozen(votes), hits=_frozen(hits), misses=_frozen(misses)
-        )
+        return self._but(votes=_frozen(votes), hits=_frozen(hits), misses=_frozen(misses))
 
     def stale(self, cfg: SlamConfig) -> IntArray:
         """The landmarks to remove: missed ``prune_misses`` scans more than matched."""
@@ -137,8 +153,7 @@ class MapBook:
         """The book with landmarks ``drop`` removed."""
         keep = np.ones(self.size, dtype=bool)
         keep[drop] = False
-        return dataclasses.replace(
-            self,
+        return self._but(
             votes=_frozen(self.votes[keep]),
             hits=_frozen(self.hits[keep]),
             misses=_frozen(self.misses[keep]),
@@ -180,8 +195,7 @@ class MapBook:
         confirm_votes = cvotes[owner[confirm]]
         fresh = np.flatnonzero(owner < 0)
         keep = ~ready
-        book = dataclasses.replace(
-            self,
+        book = self._but(
             cand_xy=_frozen(np.vstack([cxy[keep], xy[fresh]])),
             cand_seen=_frozen(np.concatenate([seen[keep], np.ones(len(fresh), dtype=np.intp)])),
             cand_votes=_frozen(np.vstack([cvotes[keep], votes[fresh]])),
@@ -193,8 +207,7 @@ class MapBook:
         """The book with landmarks appended, one per row of colour ``votes`` (c, 3)."""
         k = len(votes)
         zi = np.zeros(k, dtype=np.intp)
-        return dataclasses.replace(
-            self,
+        return self._but(
             votes=_frozen(np.vstack([self.votes, votes])),
             hits=_frozen(np.concatenate([self.hits, zi + 1])),
             misses=_frozen(np.concatenate([self.misses, zi])),
@@ -211,6 +224,4 @@ class MapBook:
             and travelled >= cfg.min_loop_distance
             and float(np.hypot(*(xy - start))) <= cfg.loop_radius
         )
-        return dataclasses.replace(
-            self, travelled=travelled, last_xy=_frozen(xy.copy()), closed=closed
-        )
+        return self._but(travelled=travelled, last_xy=_frozen(xy.copy()), closed=closed)

@@ -234,3 +234,31 @@ def test_downdated_is_m_minus_u_v_exactly_symmetric() -> None:
     out = kernels.downdated(m, u, v)
     assert np.array_equal(out, out.T)
     assert_allclose(out, m - u @ v, rtol=0, atol=1e-12)
+
+
+def _downdated_term_by_term(m: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``kernels.downdated``'s arithmetic written plainly: each lower entry is m[i, j] minus
+    u[i, q] v[q, j] one term at a time in the order of q, the upper entry its mirror."""
+    n, k = u.shape
+    out = np.empty((n, n))
+    for i in range(n):
+        for j in range(i + 1):
+            r = m[i, j]
+            for q in range(k):
+                r -= u[i, q] * v[q, j]
+            out[i, j] = out[j, i] = r
+    return out
+
+
+def test_downdated_takes_the_terms_in_order_eight_at_a_time_bit_for_bit() -> None:
+    """The kernel's eight-term passes and its tiled mirror give the bits of the plain
+    term-by-term loop (the numbers the filter had before), for k below, at and past
+    multiples of 8, and n past the mirror's 32-row tiles and not a multiple of them."""
+    rng = np.random.default_rng(16)
+    for n, k in ((70, 8), (70, 13), (45, 28), (33, 3)):
+        m, u, w = rng.normal(size=(n, n)), rng.normal(size=(n, k)), rng.normal(size=(k, k))
+        m, w = m + m.T, w + w.T
+        v = np.ascontiguousarray(w @ u.T)
+        out = kernels.downdated(m, np.ascontiguousarray(u), v)
+        assert np.array_equal(out, _downdated_term_by_term(m, u, v)), (n, k)
+        assert np.array_equal(out, out.T)

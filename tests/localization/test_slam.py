@@ -245,6 +245,23 @@ def test_book_candidates_confirm_after_three_sightings_and_vote_colours() -> Non
     assert len(book.cand_seen) == 0  # timed out
 
 
+def test_book_but_is_dataclasses_replace_for_every_field() -> None:
+    """The book's own replace (``MapBook._but``, cheaper than ``dataclasses.replace``)
+    carries every field: changing any one gives ``dataclasses.replace``'s book, and a field
+    added to MapBook and not to ``_but`` fails here."""
+    book = MapBook.empty()
+    same = book._but()
+    assert all(getattr(same, f.name) is getattr(book, f.name) for f in dataclasses.fields(MapBook))
+    for i, field in enumerate(dataclasses.fields(MapBook)):
+        value = object() if field.name != "closed" else True
+        changed = book._but(**{field.name: value})
+        expected = dataclasses.replace(book, **{field.name: value})
+        assert all(
+            getattr(changed, f.name) is getattr(expected, f.name)
+            for f in dataclasses.fields(MapBook)
+        ), (i, field.name)
+
+
 def test_book_classes_are_the_vote_majority_and_make_the_landmark_map() -> None:
     """Worked: votes (2 blue), (none), (1 yellow, 1 orange) are classes 0, -1 and 1 (a tie
     goes to the first), the labels blue, unknown, yellow; a LandmarkMap takes the classes
