@@ -216,9 +216,16 @@ def test_killed_sweep_resumes(tmp_path: Path, sig: signal.Signals, workers: str)
     out = tmp_path / "out"
     command = [*CONESIM, "sweep", str(path), "--out", str(out), "--workers", workers]
     command += ["--pictures", "none"]
-    proc = subprocess.Popen(
-        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True
-    )
+    # Ctrl-C as in a terminal: the sweep starts with SIGINT's default action
+    # whatever this test process holds (a child inherits an ignored signal, and
+    # in the whole suite the sweep ran on after SIGINT, as if it was ignored).
+    held = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        proc = subprocess.Popen(
+            command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True
+        )
+    finally:
+        signal.signal(signal.SIGINT, held)
     try:
         wait_for_rows(out, 1, proc)
         if sig == signal.SIGKILL:
