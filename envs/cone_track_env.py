@@ -33,7 +33,9 @@ physics steps at 200 Hz). The steering actuator has a rate limit and a lag
 position (/ 1 m) and heading (/ 0.1 rad) uncertainty, the cone detection's
 age (/ 1 s), then the K nearest detected cones in ``os_sensor`` as (x / range,
 y / range, mask, side: +1 blue / -1 yellow / 0, orange). ``observation="dict"``:
-the same in raw units with the estimated pose and its covariance. The
+the same in raw units with the estimated pose and its covariance.
+``path_preview=N`` (default 0) appends the global path's next N points
+(``path_preview_step`` apart) in the localized ``gps_antenna`` frame. The
 layouts and scales: ``envs.observation``.
 
 ## Rewards
@@ -128,7 +130,13 @@ from conesim.core.geodesy import GeodesyError
 from conesim.core.pose import Pose2D
 from conesim.envs.config import RANDOM_TRACK, EnvConfig
 from conesim.envs.loop import Broadcast, ClosedLoop, EndReason, StepRecord, world_seed
-from conesim.envs.observation import SensorMemory, build_dict, build_vector, observation_space
+from conesim.envs.observation import (
+    PathPreview,
+    SensorMemory,
+    build_dict,
+    build_vector,
+    observation_space,
+)
 from conesim.envs.render import Renderer, Scene, SceneKeeper
 from conesim.envs.scenario import Localization
 from conesim.planner.messages import ControlCommand
@@ -189,13 +197,14 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         self._obs_scale = (p.max_steer, p.max_accel if cfg.action == "centred" else p.max_decel)
         self._low = [float(v) for v in self.action_space.low]
         self._high = [float(v) for v in self.action_space.high]
-        self.observation_space = observation_space(cfg.max_cones, cfg.observation)
+        self.observation_space = observation_space(cfg.max_cones, cfg.observation, cfg.path_preview)
         self._record: StepRecord | None = None  # the last step's; None before reset
         self._renderer: Renderer | None = None
         self._scenes = self._scene_keeper()
         self._command = (0.0, 0.0)  # the last command over the observation's scales
         self._memory = SensorMemory()
         self._broadcast: Broadcast | None = None
+        self._preview = self._path_preview()
 
     # -- gymnasium API -----------------------------------------------------------------------
 
@@ -247,6 +256,7 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         self._command = (0.0, 0.0)
         self._memory = SensorMemory()
         self._broadcast = None
+        self._preview = self._path_preview()
         self._scenes = self._scene_keeper()
         if self._renderer is not None:
             self._renderer.global_path = loop.global_path
@@ -377,10 +387,26 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
             self._broadcast = record.broadcasts[-1]
         self._scenes.update(record)
 
+    def _path_preview(self) -> PathPreview | None:
+        """The episode's path preview (its global path's), None without one."""
+        n = self.config.path_preview
+        if not n:
+            return None
+        return PathPreview(self.loop.global_path.polyline, n, self.config.path_preview_step)
+
     def _observe(self) -> ObsType:
         loop = self.loop
         estimate = loop.localizer.estimate(loop.time)
         cfg = self.config
+        published = None  # the frame tree's pose, where there is no estimate and it is used
+        if estimate is None and (cfg.observation == "dict" or self._preview is not None):
+            published = loop.localizer.published_pose()
+        preview = None  # (its points in gps_antenna, zeros without a pose; its length)
+        if self._preview is not None:
+            pose = published if estimate is None else estimate.pose
+            n = cfg.path_preview
+            points = np.zeros((n, 2)) if pose is None else self._preview.points(pose)
+            preview = (points, self._preview.length)
         if cfg.observation == "vector":
             valid = estimate is not None if loop.localization == "fused" else bool(self._broadcast)
             return build_vector(
@@ -391,15 +417,17 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
                 loop.world_config.sensor_profile.cones.max_range,
                 pose_valid=valid,
                 now=loop.time,
+                preview=preview,
             )
         return build_dict(
             self._memory,
             estimate,
             self._command,
             cfg.max_cones,
-            published=loop.localizer.published_pose() if estimate is None else None,
+            published=published,
             awaiting_estimate=estimate is None and loop.localization == "fused",
             now=loop.time,
+            preview=None if preview is None else preview[0],
         )
 
     def _reward_terms(self, last: StepRecord, now: StepRecord) -> dict[str, float]:

@@ -103,6 +103,9 @@ class EnvConfig:
         physics_rate: physics steps per second [Hz]; a multiple of control_rate.
         time_limit: truncation time [s]; None = 60 s per lap plus 30 s.
         max_cones: K, the detected cones in the observation [-].
+        path_preview: N, the global path's points ahead in the observation
+            (0: none; ``envs.observation``) [-].
+        path_preview_step: their spacing along the path [m].
         observation: ``vector`` (normalised float32 Box) or ``dict`` (raw units).
         action: ``centred`` (``Box(-1, 1)``, zero is no steering and no
             acceleration, symmetric) or ``physical`` (steering [rad],
@@ -138,6 +141,8 @@ class EnvConfig:
     physics_rate: float = 200.0  # [Hz]
     time_limit: float | None = None  # [s]
     max_cones: int = 32
+    path_preview: int = 0
+    path_preview_step: float = 2.0  # [m]
     observation: str = "vector"
     action: ActionMode = "centred"
     info: InfoMode = "lean"
@@ -187,6 +192,13 @@ class EnvConfig:
             raise ValueError(f"EnvConfig.laps must be an integer >= 1, got {self.laps!r}")
         if not (_is_int(self.max_cones) and 1 <= self.max_cones <= 512):
             raise ValueError(f"EnvConfig.max_cones must be in [1, 512], got {self.max_cones!r}")
+        if not (_is_int(self.path_preview) and 0 <= self.path_preview <= 256):
+            raise ValueError(
+                f"EnvConfig.path_preview must be in [0, 256], got {self.path_preview!r}"
+            )
+        step = self.path_preview_step
+        if not (_is_real(step) and math.isfinite(step) and 0.0 < step <= 50.0):
+            raise ValueError(f"EnvConfig.path_preview_step must be in (0, 50] [m], got {step!r}")
         for name in ("terminate_off_track", "terminate_stuck"):
             flag = getattr(self, name)
             if not isinstance(flag, bool | np.bool_):
@@ -227,6 +239,8 @@ class EnvConfig:
             "track": track if isinstance(track, GeneratedTrack) else os.fspath(track),
             "laps": int(self.laps),
             "max_cones": int(self.max_cones),
+            "path_preview": int(self.path_preview),
+            "path_preview_step": float(self.path_preview_step),
             "control_rate": float(self.control_rate),
             "physics_rate": float(self.physics_rate),
             "time_limit": None if self.time_limit is None else float(self.time_limit),

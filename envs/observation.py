@@ -4,7 +4,10 @@ Vector mode (the default): float32, shape ``(8 + 5 K,)``, every entry
 scaled to order 1 and clipped to the space's bounds::
 
     [speed, yaw_rate, steer, accel, pose_valid, pos_std, yaw_std, cones_age,
-     x_1, y_1, m_1, side_1, orange_1, ..., x_K, y_K, m_K, side_K, orange_K]
+     x_1, y_1, m_1, side_1, orange_1, ..., x_K, y_K, m_K, side_K, orange_K,
+     px_1, py_1, ..., px_N, py_N]
+
+(the last ``2 N`` entries only with ``path_preview`` N > 0; shape ``(8 + 5 K + 2 N,)``)
 
 ============  ===========================================  =========  ==========
 entry         what                                         scale      bounds
@@ -20,6 +23,7 @@ x_i, y_i      detected cone in ``os_sensor``, nearest 1st  max_range  [-1, 1]
 m_i           1 for a detected cone, 0 for padding         -          {0, 1}
 side_i        +1 blue (left), -1 yellow (right), else 0    -          {-1, 0, 1}
 orange_i      1 for an orange or big orange cone           -          {0, 1}
+px_j, py_j    global path point j ahead, ``gps_antenna``   N x step   [-2, 2]
 ============  ===========================================  =========  ==========
 
 Each entry is its value divided by its scale, then clipped to its bounds.
@@ -37,6 +41,15 @@ Each entry is its value divided by its scale, then clipped to its bounds.
 * ``max_range`` is the cone detector's (rtk: 15 m); padded cones are zeros;
   a colour-blind detection or an ``unknown`` cone has side and orange 0;
   ``cones_age`` is 1 before the first detection.
+* the path preview (``path_preview`` N points, ``path_preview_step`` apart):
+  the track's global path (the asset the autopilot plans with, surveyed as
+  the scenario says) at N stations ``step``, ``2 step``, ... ahead of the
+  point nearest the antenna, in the frame of the localized pose (the
+  estimate, or the frame tree's pose without a filter): x forward, y left,
+  over the preview's length ``N step``. It is zeros while ``pose_valid`` is
+  0. A policy reads the road ahead from it as the autopilot's pure pursuit
+  does, not from the cones of the last scan alone (f1tenth_gym and
+  CarRacing policies get a comparable look ahead: waypoints or the picture).
 
 Dict mode (raw units, as before the vector mode was normalised): ``ego`` is
 ``[speed, yaw_rate, steer_cmd, accel_cmd, pos_std, yaw_std]`` [m/s, rad/s,
@@ -53,9 +66,14 @@ broadcast yet), when ``pose`` and ``pose_covariance`` are zeros.
 minus its stamp (the scan's capture time), so the detector's latency (rtk:
 0.2 s, fssim's LiDAR) plus the time since it arrived; ``AGE_BOUND`` (1000 s)
 before the first detection. A policy that drives on the cones can read from
-it how far the car has moved since they were seen. Every value
+it how far the car has moved since they were seen. With a path preview, ``path`` holds its
+points, (N, 2) [m] in ``gps_antenna`` (zeros without a pose). Every value
 is clipped into the space's bounds so ``observation_space.contains(obs)``
 always holds.
+
+The preview's projection is race control's walk along the path
+(``sim.progress.PolylineProgress``), so a figure of eight's crossing does
+not make it jump to the other loop.
 """
 
 from __future__ import annotations
@@ -69,8 +87,10 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from conesim.core.messages import CONE_COLOURS, ConeDetections, Imu, Message, WheelSpeed
+from conesim.core.polyline import Polyline
 from conesim.core.pose import Pose2D
 from conesim.localization.ekf import Estimate
+from conesim.sim.progress import PolylineProgress
 
 EGO_LOW = np.array([-5.0, -10.0, -1.0, -1.0, 0.0, 0.0], dtype=np.float32)
 EGO_HIGH = np.array([60.0, 10.0, 1.0, 1.0, 1e3, math.pi], dtype=np.float32)
@@ -91,20 +111,23 @@ VECTOR_EGO_LOW = np.array([-1.0, -2.0, -1.0, -1.0, 0.0, 0.0, 0.0, 0.0], dtype=np
 VECTOR_EGO_HIGH = np.array([2.0, 2.0, 1.0, 1.0, 1.0, 3.0, 3.0, 1.0], dtype=np.float32)
 _EGO_LOW = VECTOR_EGO_LOW.tolist()
 _EGO_HIGH = VECTOR_EGO_HIGH.tolist()
+PREVIEW_BOUND = 2.0  # vector mode: the preview's points over its length, clipped to +-this
 _SIDE = {"blue": 1.0, "yellow": -1.0}
 _ORANGE = {"orange": 1.0, "big_orange": 1.0}
 
 
-def observation_space(max_cones: int, mode: str) -> spaces.Space[Any]:
-    """The Box (vector) or Dict (dict) observation space."""
+def observation_space(max_cones: int, mode: str, preview: int = 0) -> spaces.Space[Any]:
+    """The Box (vector) or Dict (dict) observation space (``preview``: path points)."""
     if mode == "vector":
         cone_low = np.tile(np.array([-1.0, -1.0, 0.0, -1.0, 0.0], np.float32), max_cones)
         cone_high = np.tile(np.array([1.0, 1.0, 1.0, 1.0, 1.0], np.float32), max_cones)
+        path = np.full(2 * preview, PREVIEW_BOUND, np.float32)
         return spaces.Box(
-            np.concatenate([VECTOR_EGO_LOW, cone_low]),
-            np.concatenate([VECTOR_EGO_HIGH, cone_high]),
+            np.concatenate([VECTOR_EGO_LOW, cone_low, -path]),
+            np.concatenate([VECTOR_EGO_HIGH, cone_high, path]),
             dtype=np.float32,
         )
+    path_space = {"path": spaces.Box(-CONE_BOUND, CONE_BOUND, (preview, 2), np.float32)}
     return spaces.Dict(
         {
             "ego": spaces.Box(EGO_LOW, EGO_HIGH, dtype=np.float32),
@@ -119,8 +142,38 @@ def observation_space(max_cones: int, mode: str) -> spaces.Space[Any]:
             "pose_covariance": spaces.Box(-1e6, 1e6, (3, 3), dtype=np.float32),
             "pose_valid": spaces.Box(0.0, 1.0, (1,), dtype=np.float32),
             "cones_age": spaces.Box(0.0, AGE_BOUND, (1,), dtype=np.float32),
+            **(path_space if preview else {}),
         }
     )
+
+
+class PathPreview:
+    """The global path ahead of a pose: ``points`` points ``step`` [m] apart
+    along it from the pose's nearest point, in the pose's frame.
+
+    Args:
+        path: the global path in ``reference`` (``GlobalPath.polyline``).
+        points: N [-].
+        step: their spacing along the path [m].
+
+    Attributes:
+        length: how far ahead the last point is, ``N step`` [m] (vector
+            mode's scale).
+    """
+
+    def __init__(self, path: Polyline, points: int, step: float) -> None:
+        self._line = path
+        self._progress = PolylineProgress(path)
+        self._ahead = step * np.arange(1, points + 1, dtype=float)
+        self.length = float(self._ahead[-1])
+
+    def points(self, pose: Pose2D) -> NDArray[np.float64]:
+        """(N, 2) [m]: the points in ``pose``'s frame (x forward, y left)."""
+        station = self._progress.project_xy(pose.x, pose.y)[0]
+        ahead = self._line.at(station + self._ahead)
+        dx, dy = ahead[:, 0] - pose.x, ahead[:, 1] - pose.y
+        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+        return np.column_stack([c * dx + s * dy, c * dy - s * dx])
 
 
 @dataclass
@@ -220,6 +273,7 @@ def build_vector(
     *,
     pose_valid: bool,
     now: float,
+    preview: tuple[NDArray[np.float64], float] | None = None,
 ) -> NDArray[np.float32]:
     """The normalised vector observation (see the module docstring).
 
@@ -231,6 +285,8 @@ def build_vector(
         max_range: the cone detector's range, the cones' scale [m].
         pose_valid: localization has a pose.
         now: the simulation time [s].
+        preview: with a path preview, (its points in ``gps_antenna`` [m], zeros
+            without a pose; its length [m], their scale).
     """
     speed, yaw_rate, pos_std, yaw_std = _motion(memory, estimate)
     det = memory.detections
@@ -245,12 +301,15 @@ def build_vector(
         yaw_std / YAW_STD_SCALE,
         age if math.isfinite(age) else 1.0,
     )
-    out = np.empty(VECTOR_EGO_SIZE + VECTOR_CONE_SIZE * max_cones, dtype=np.float32)
+    cones = VECTOR_EGO_SIZE + VECTOR_CONE_SIZE * max_cones
+    out = np.empty(cones + (0 if preview is None else preview[0].size), np.float32)
     # clipped as plain floats: np.clip's wrapper costs more than the rest
     out[:VECTOR_EGO_SIZE] = [
         min(max(v, lo), hi) for v, lo, hi in zip(ego, _EGO_LOW, _EGO_HIGH, strict=True)
     ]
-    out[VECTOR_EGO_SIZE:] = memory.vector_cones(max_cones, max_range)
+    out[VECTOR_EGO_SIZE:cones] = memory.vector_cones(max_cones, max_range)
+    if preview is not None:
+        out[cones:] = np.clip(preview[0].ravel() / preview[1], -PREVIEW_BOUND, PREVIEW_BOUND)
     return out
 
 
@@ -263,10 +322,13 @@ def build_dict(
     published: Pose2D | None = None,
     awaiting_estimate: bool = False,
     now: float,
+    preview: NDArray[np.float64] | None = None,
 ) -> dict[str, NDArray[np.float32]]:
     """The dict observation for the current step (see the module docstring).
 
     ``command``: the previous command over the action's scales.
+    ``preview``: the path preview's points in ``gps_antenna`` [m] (zeros
+    without a pose), or None without a preview.
     ``published`` is the frame tree's pose, used when there is no
     ``estimate`` (``raw`` and ``truth`` localization).
     ``awaiting_estimate``: a filter runs but has no estimate yet, so the
@@ -305,4 +367,9 @@ def build_dict(
         "pose_covariance": np.clip(pose_cov, -1e6, 1e6).astype(np.float32),
         "pose_valid": np.array([0.0 if at is None else 1.0], dtype=np.float32),
         "cones_age": np.array([age], dtype=np.float32),
+        **(
+            {}
+            if preview is None
+            else {"path": np.clip(preview, -CONE_BOUND, CONE_BOUND).astype(np.float32)}
+        ),
     }

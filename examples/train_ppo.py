@@ -94,8 +94,11 @@ ENV_SETTINGS: dict[str, Any] = {
     "sensors": "ideal",
     "localization": "truth",
     "control_rate": 20.0,
+    "path_preview": 10,
+    "path_preview_step": 3.0,
 }
-"""The env's settings for training and evaluation (the module docstring says why)."""
+"""The env's settings for training and evaluation (the module docstring says why;
+``--path-preview`` changes the preview's points, 0 for none)."""
 
 PPO_SETTINGS: dict[str, Any] = {
     "n_steps": 1024,
@@ -337,6 +340,10 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--train-seeds", type=int, nargs=2, default=(0, 1000), metavar=("LO", "HI"))
     p.add_argument("--eval-seed0", type=int, default=1000)
     p.add_argument("--eval-tracks", type=int, default=20)
+    p.add_argument(
+        "--path-preview", type=int, default=ENV_SETTINGS["path_preview"],
+        help="global path points ahead in the observation (0: none)",
+    )  # fmt: skip
     p.add_argument("--seed", type=int, default=0, help="PPO's seed")
     return p.parse_args(argv)
 
@@ -346,7 +353,8 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     args.out.mkdir(parents=True, exist_ok=True)
     torch.set_num_threads(1)
     seeds = (int(args.train_seeds[0]), int(args.train_seeds[1]))
-    factories = [make_env(seeds, rank, ENV_SETTINGS) for rank in range(args.n_envs)]
+    env_settings = {**ENV_SETTINGS, "path_preview": args.path_preview}
+    factories = [make_env(seeds, rank, env_settings) for rank in range(args.n_envs)]
     venv: VecEnv = (
         SubprocVecEnv(factories, start_method="fork")
         if args.vec == "subproc"
@@ -386,7 +394,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
 
     print(f"evaluating on {args.eval_tracks} held-out tracks ...")
     tracks = held_out_tracks(args.eval_seed0, args.eval_tracks, seeds)
-    results = evaluate(model, tracks, ENV_SETTINGS)
+    results = evaluate(model, tracks, env_settings)
     ratios = [r.ratio for r in results if r.ratio is not None]
     figures = {
         "laps_completed_share": sum(r.lap_completed for r in results) / len(results),
@@ -416,7 +424,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
             "cpus": os.cpu_count(),
         },
         "settings": {
-            "env": {**ENV_SETTINGS, "track": "random", "track_seeds": list(seeds)},
+            "env": {**env_settings, "track": "random", "track_seeds": list(seeds)},
             "ppo": settings,
             "n_envs": args.n_envs,
             "vec": args.vec,
