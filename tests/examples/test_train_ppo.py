@@ -71,8 +71,11 @@ def test_the_policy_loads_and_drives(run: Path) -> None:
     import conesim
 
     model = PPO.load(run / "policy.zip", device="cpu")
-    env = gym.make(conesim.ENV_ID, track="random", track_seeds=(1000, 1010),
-                   sensors="ideal", localization="truth", control_rate=20.0)  # fmt: skip
+    settings = json.loads((run / "results.json").read_text(encoding="utf-8"))["settings"]["env"]
+    assert settings["path_preview"] == 10  # the baseline's observation has the path ahead
+    settings.update(track="random", track_seeds=(1000, 1010))
+    env = gym.make(conesim.ENV_ID, **settings)
+    assert env.observation_space.shape == model.observation_space.shape == (8 + 5 * 32 + 20,)
     obs, _ = env.reset(seed=3)
     for _ in range(20):
         action, _ = model.predict(obs, deterministic=True)
