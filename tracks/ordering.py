@@ -14,13 +14,6 @@ tour through its cones, which we approximate the way TSP heuristics do:
 
 An open boundary (a lane) is the same problem with a dummy cone at distance 0
 from every cone: the tour through it, cut at the dummy, is the shortest path.
-
-The two improvement searches are numba kernels (scalar loops over the
-distance matrix; scipy has no TSP heuristic): in numpy they took about
-0.15 s of every generated track's 0.3-0.5 s, which an env with
-``track="random"`` pays at each reset onto a new track. They make the same
-moves as the array form they replaced: the first best move in the same
-scan order, the same sums.
 """
 
 from __future__ import annotations
@@ -29,20 +22,12 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import distance_matrix
 
-from conesim.core.compiled import cached_njit
-
 IntArray = NDArray[np.intp]
 FloatArray = NDArray[np.float64]
 
 _EPS = 1e-9  # [m] minimum improvement that counts
 _NN_STARTS = 4  # nearest-neighbour tours from this many spread-out starting cones
-
-
-def _probe() -> None:
-    """Nothing: what ``cached_njit`` asks numba to cache, from this file's directory."""
-
-
-_compiled = cached_njit(_probe, "conesim.tracks.ordering")
+_OR_OPT_ROWS = 256  # runs evaluated per array step in or-opt (bounds memory to rows x n)
 
 
 def order_loop(points: FloatArray) -> IntArray:
@@ -115,32 +100,22 @@ def _improve(dist: FloatArray, tour: IntArray) -> IntArray:
 
 def _two_opt(dist: FloatArray, t: IntArray) -> bool:
     """Improve ``t`` in place by segment reversals; True if anything changed."""
-    return bool(_two_opt_kernel(dist, t, _EPS))
-
-
-@_compiled
-def _two_opt_kernel(dist, t, eps):
-    """:func:`_two_opt`: for each edge (a, b) in turn, the best edge (c, d) after it
-    (the first of equal ones), reversed between them if that saves more than ``eps``."""
-    n = t.shape[0]
+    n = len(t)
     changed_any = False
     changed = True
     while changed:
         changed = False
         for i in range(n - 2):
             a, b = t[i], t[i + 1]
-            best, best_j = np.inf, -1
-            for j in range(i + 2, n if i > 0 else n - 1):
-                c, d = t[j], t[(j + 1) % n]
-                delta = dist[a, c] + dist[b, d] - dist[a, b] - dist[c, d]
-                if delta < best:
-                    best, best_j = delta, j
-            if best_j >= 0 and best < -eps:
-                lo, hi = i + 1, best_j
-                while lo < hi:
-                    t[lo], t[hi] = t[hi], t[lo]
-                    lo += 1
-                    hi -= 1
+            j = np.arange(i + 2, n if i > 0 else n - 1)
+            if len(j) == 0:
+                continue
+            c, d = t[j], t[(j + 1) % n]
+            delta = dist[a, c] + dist[b, d] - dist[a, b] - dist[c, d]
+            k = int(np.argmin(delta))
+            if delta[k] < -_EPS:
+                jj = int(j[k])
+                t[i + 1 : jj + 1] = t[i + 1 : jj + 1][::-1].copy()
                 changed = changed_any = True
     return changed_any
 
@@ -151,44 +126,43 @@ def _or_opt(dist: FloatArray, t: IntArray) -> tuple[IntArray, bool]:
     Taking the run first..last out from between p and q gains
     d(p, first) + d(last, q) - d(p, q); putting it into the edge (c, d),
     forward or reversed, costs d(c, first) + d(last, d) - d(c, d). Each step
-    makes the best move over all runs and edges.
+    makes the best move over all runs and edges (evaluated as arrays).
     """
     changed = False
     while True:
-        run, start, edge, reverse = _best_run_move(dist, t, _EPS)
-        if run == 0:
+        move = _best_run_move(dist, t)
+        if move is None:
             return t, changed
-        t = _move_run(t, (start + np.arange(run)) % len(t), edge, reverse)
+        t = _move_run(t, *move)
         changed = True
 
 
-@_compiled
-def _best_run_move(dist, t, eps):
-    """(run length, its first tour position, target edge, reversed) of the best move
-    gaining more than ``eps``, the first of equal ones scanning runs of 1, 2, 3, then
-    their starts, then the edges; run length 0: none."""
-    n = t.shape[0]
-    best_gain = eps
-    best_run, best_start, best_edge, best_reverse = 0, 0, 0, False
+def _best_run_move(dist: FloatArray, t: IntArray) -> tuple[IntArray, int, bool] | None:
+    """(run positions, target edge, reversed) of the best improving move, or None."""
+    n = len(t)
+    after_edge = np.roll(t, -1)  # edge e joins tour positions e and e + 1
+    base = dist[t, after_edge]
+    edges = np.arange(n)
+    best, best_gain = None, _EPS
     for run in (1, 2, 3):
         if n < run + 3:
             continue
-        for s in range(n):
-            first, last = t[s], t[(s + run - 1) % n]
-            p, q = t[(s - 1) % n], t[(s + run) % n]
+        for lo in range(0, n, _OR_OPT_ROWS):
+            starts = np.arange(lo, min(n, lo + _OR_OPT_ROWS))
+            first, last = t[starts], t[(starts + run - 1) % n]
+            p, q = t[(starts - 1) % n], t[(starts + run) % n]
             gain = dist[p, first] + dist[last, q] - dist[p, q]
-            for e in range(n):
-                if (e - s + 1) % n <= run:  # an edge at the run itself
-                    continue
-                c, d = t[e], t[(e + 1) % n]
-                forward = dist[c, first] + dist[last, d]
-                backward = dist[c, last] + dist[first, d]
-                net = gain - (min(forward, backward) - dist[c, d])
-                if net > best_gain:
-                    best_gain = net
-                    best_run, best_start, best_edge = run, s, e
-                    best_reverse = backward < forward
-    return best_run, best_start, best_edge, best_reverse
+            forward = dist[t[None, :], first[:, None]] + dist[last[:, None], after_edge[None, :]]
+            backward = dist[t[None, :], last[:, None]] + dist[first[:, None], after_edge[None, :]]
+            cost = np.minimum(forward, backward) - base[None, :]
+            touching = (edges[None, :] - starts[:, None] + 1) % n <= run  # edges at the run
+            net = np.where(touching, -np.inf, gain[:, None] - cost)
+            row, edge = np.unravel_index(int(np.argmax(net)), net.shape)
+            if net[row, edge] > best_gain:
+                best_gain = float(net[row, edge])
+                pos = (starts[row] + np.arange(run)) % n
+                best = (pos, int(edge), bool(backward[row, edge] < forward[row, edge]))
+    return best
 
 
 def _move_run(t: IntArray, pos: IntArray, edge: int, reverse: bool) -> IntArray:
