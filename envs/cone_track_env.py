@@ -111,7 +111,7 @@ that episode only.
 * v0: first release (conesim 0.1.0, unreleased: its dict observation grew
   ``pose_valid`` and ``cones_age``; then the centred action, the normalised
   vector observation, the lean info, the FS-rate reward and the stuck
-  rule's grace and the random tracks came, all before any release; a change
+  rule's grace, the random tracks and the path preview came, all before any release; a change
   after one gets a new version).
 """
 
@@ -403,7 +403,10 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
             published = loop.localizer.published_pose()
         preview = None  # (its points in gps_antenna, zeros without a pose; its length)
         if self._preview is not None:
-            pose = published if estimate is None else estimate.pose
+            # A filter's own estimate (none after it resets, whatever was broadcast before),
+            # else the frame tree's pose.
+            unfiltered = loop.localization in ("raw", "truth")
+            pose = estimate.pose if estimate is not None else published if unfiltered else None
             n = cfg.path_preview
             points = np.zeros((n, 2)) if pose is None else self._preview.points(pose)
             preview = (points, self._preview.length)

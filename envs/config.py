@@ -197,8 +197,13 @@ class EnvConfig:
                 f"EnvConfig.path_preview must be in [0, 256], got {self.path_preview!r}"
             )
         step = self.path_preview_step
-        if not (_is_real(step) and math.isfinite(step) and 0.0 < step <= 50.0):
-            raise ValueError(f"EnvConfig.path_preview_step must be in (0, 50] [m], got {step!r}")
+        if not (_is_real(step) and math.isfinite(step) and 0.1 <= step <= 50.0):
+            raise ValueError(f"EnvConfig.path_preview_step must be in [0.1, 50] [m], got {step!r}")
+        if self.path_preview * step > 100.0:
+            raise ValueError(
+                f"EnvConfig.path_preview x path_preview_step must be <= 100 m (the "
+                f"observation's bound), got {self.path_preview} x {step!r}"
+            )
         for name in ("terminate_off_track", "terminate_stuck"):
             flag = getattr(self, name)
             if not isinstance(flag, bool | np.bool_):

@@ -1,4 +1,4 @@
-"""The env's observation: the estimated ego state and the K nearest detected cones.
+"""The env's observation: the ego state, the K nearest detected cones, the path ahead.
 
 Vector mode (the default): float32, shape ``(8 + 5 K,)``, every entry
 scaled to order 1 and clipped to the space's bounds::
@@ -44,12 +44,12 @@ Each entry is its value divided by its scale, then clipped to its bounds.
 * the path preview (``path_preview`` N points, ``path_preview_step`` apart):
   the track's global path (the asset the autopilot plans with, surveyed as
   the scenario says) at N stations ``step``, ``2 step``, ... ahead of the
-  point nearest the antenna, in the frame of the localized pose (the
+  antenna's projection on it, in the frame of the localized pose (the
   estimate, or the frame tree's pose without a filter): x forward, y left,
-  over the preview's length ``N step``. It is zeros while ``pose_valid`` is
-  0. A policy reads the road ahead from it as the autopilot's pure pursuit
-  does, not from the cones of the last scan alone (f1tenth_gym and
-  CarRacing policies get a comparable look ahead: waypoints or the picture).
+  over the preview's length ``N step`` (at most 100 m). It is zeros while
+  ``pose_valid`` is 0. A policy reads the road ahead from it, not from the
+  cones of the last scan alone (f1tenth_gym and CarRacing policies get a
+  comparable look ahead: waypoints or the picture).
 
 Dict mode (raw units, as before the vector mode was normalised): ``ego`` is
 ``[speed, yaw_rate, steer_cmd, accel_cmd, pos_std, yaw_std]`` [m/s, rad/s,
@@ -73,7 +73,12 @@ always holds.
 
 The preview's projection is race control's walk along the path
 (``sim.progress.PolylineProgress``), so a figure of eight's crossing does
-not make it jump to the other loop.
+not make it jump to the other loop; more than 2 m off the path, a stretch a
+whole-path search finds 1 m nearer takes over (as race control's does off
+the track), so a car that left the path and rejoined it elsewhere sees the
+road ahead of it there. The first projection of an episode has no walk to
+go on: started on a crossing (a start pose on the skidpad's middle), it may
+take either loop.
 """
 
 from __future__ import annotations
@@ -112,6 +117,8 @@ VECTOR_EGO_HIGH = np.array([2.0, 2.0, 1.0, 1.0, 1.0, 3.0, 3.0, 1.0], dtype=np.fl
 _EGO_LOW = VECTOR_EGO_LOW.tolist()
 _EGO_HIGH = VECTOR_EGO_HIGH.tolist()
 PREVIEW_BOUND = 2.0  # vector mode: the preview's points over its length, clipped to +-this
+PREVIEW_REJOIN_OFFSET = 2.0  # [m] farther than this from the path, the preview looks for a
+PREVIEW_REJOIN_MARGIN = 1.0  # [m] stretch this much nearer (race control's rule, off the track)
 _SIDE = {"blue": 1.0, "yellow": -1.0}
 _ORANGE = {"orange": 1.0, "big_orange": 1.0}
 
@@ -169,11 +176,10 @@ class PathPreview:
 
     def points(self, pose: Pose2D) -> NDArray[np.float64]:
         """(N, 2) [m]: the points in ``pose``'s frame (x forward, y left)."""
-        station = self._progress.project_xy(pose.x, pose.y)[0]
-        ahead = self._line.at(station + self._ahead)
-        dx, dy = ahead[:, 0] - pose.x, ahead[:, 1] - pose.y
-        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
-        return np.column_stack([c * dx + s * dy, c * dy - s * dx])
+        walked = self._progress.project_xy(pose.x, pose.y)
+        if abs(walked[1]) > PREVIEW_REJOIN_OFFSET:  # off the path: rejoined elsewhere?
+            walked = self._progress.nearer_stretch(pose.x, pose.y, walked, PREVIEW_REJOIN_MARGIN)
+        return pose.inverse_transform_points(self._line.at(walked[0] + self._ahead))
 
 
 @dataclass

@@ -137,6 +137,18 @@ class PolylineProgress:
         finally:
             self._last = last
 
+    def nearer_stretch(
+        self, px: float, py: float, walked: tuple[float, float, int, float, float], margin: float
+    ) -> tuple[float, float, int, float, float]:
+        """The walk's projection ``walked`` of (px, py) (:meth:`project_xy`'s), or that
+        of a stretch a whole-path search finds ``margin`` [m] nearer, from which the
+        walk then goes on (a point that left the line and rejoined it elsewhere)."""
+        s, lateral, index, tx, ty = self.project_xy_anew(px, py)
+        if abs(lateral) < abs(walked[1]) - margin:
+            self.restart_at(index)
+            return s, lateral, index, tx, ty
+        return walked
+
     def project_xy(self, px: float, py: float) -> tuple[float, float, int, float, float]:
         """:meth:`project` of one point on plain floats: (s, lateral, index, tx, ty).
 

@@ -250,11 +250,7 @@ class RaceControl:
         """The projection of an off-track centre (px, py): the walk's, or that of
         a stretch found by a whole-centreline search when it is
         ``rejoin_margin_m`` nearer (the walk then goes on from there)."""
-        s, lateral, index, tx, ty = self.progress.project_xy_anew(px, py)
-        if abs(lateral) < abs(walked[1]) - self.rules.rejoin_margin_m:
-            self.progress.restart_at(index)
-            return s, lateral, index, tx, ty
-        return walked
+        return self.progress.nearer_stretch(px, py, walked, self.rules.rejoin_margin_m)
 
     def is_off_track_at(self, pose: Pose2D) -> bool:
         """Whether the car with its CG at ``pose`` is off the track (all four

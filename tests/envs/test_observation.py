@@ -65,6 +65,25 @@ def test_preview_wraps_a_loop_and_clamps_an_open_path() -> None:
     )
 
 
+def test_preview_rejoins_the_path_where_the_car_is() -> None:
+    """A hairpin, two legs 6 m apart: walked along the first leg, then put on the
+    second heading back (a cut across the infield), the preview shows the second
+    leg ahead, (2, 0) and (4, 0), not the first leg 6 m to its side."""
+    leg = np.arange(0.0, 51.0)
+    turn = np.linspace(-math.pi / 2, math.pi / 2, 20)[1:-1]
+    points = np.vstack(
+        [
+            np.column_stack([leg, np.zeros_like(leg)]),
+            np.column_stack([50.0 + 3.0 * np.cos(turn), 3.0 + 3.0 * np.sin(turn)]),
+            np.column_stack([leg[::-1], np.full_like(leg, 6.0)]),
+        ]
+    )
+    preview = PathPreview(Polyline(points, False), 2, 2.0)
+    for x in (10.0, 20.0, 30.0):
+        assert_allclose(preview.points(Pose2D(x, 0.2, 0.0)), [[2, -0.2], [4, -0.2]], atol=1e-9)
+    assert_allclose(preview.points(Pose2D(30.0, 6.0, math.pi)), [[2, 0], [4, 0]], atol=1e-9)
+
+
 def _truth_points(env: ConeTrackEnv) -> np.ndarray:
     """The preview worked out apart: the exact projection of the antenna's pose."""
     pose = env.loop.localizer.published_pose()
@@ -97,6 +116,10 @@ def test_env_appends_the_preview_scaled_by_its_length() -> None:
     for _ in range(100):
         d_obs, *_ = dict_env.step(np.array([0.1, 0.6], dtype=np.float32))
     assert_allclose(d_obs["path"], _truth_points(dict_env), atol=1e-4)
+    env.reset(seed=0, options={"track": "skidpad"})  # another track: its own path
+    for _ in range(100):
+        obs, *_ = env.step(np.array([0.0, 0.6], dtype=np.float32))
+    assert_allclose(obs[-20:].reshape(10, 2), _truth_points(env) / 30.0, atol=1e-5)
     assert ConeTrackEnv(**kwargs).observation_space.shape == (8 + 5 * 32,)
     assert "path" not in ConeTrackEnv(observation="dict", **kwargs).observation_space.spaces
 
@@ -120,12 +143,16 @@ def test_check_env_with_a_preview(observation: str) -> None:
 
 
 def test_config_refuses_a_bad_preview_by_name() -> None:
-    """A negative or fractional count, or a spacing of 0 or NaN, raises naming the key."""
+    """A negative, fractional or bool count, a spacing under 0.1 m or NaN, or a preview
+    longer than 100 m raises naming the key."""
     for key, value in (
         ("path_preview", -1),
         ("path_preview", 2.5),
-        ("path_preview_step", 0.0),
+        ("path_preview", True),
+        ("path_preview_step", 0.05),
         ("path_preview_step", float("nan")),
     ):
         with pytest.raises(ValueError, match=f"EnvConfig.{key}"):
             EnvConfig.from_dict({key: value})
+    with pytest.raises(ValueError, match="path_preview x path_preview_step must be <= 100 m"):
+        EnvConfig(path_preview=40, path_preview_step=3.0)
