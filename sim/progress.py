@@ -5,7 +5,7 @@ answer it walks to the neighbouring segment while that one is closer (a few
 scalar steps per physics step, since the car moves centimetres). A
 figure-of-eight (skidpad) or a hairpin whose legs lie close together therefore
 never makes the car jump to the other leg. The first query (or one after a
-reset) searches globally with a ``cKDTree`` and then a window of segments.
+reset) searches globally: the nearest vertex, then a window of segments around it.
 
 The walk runs at every physics step (race control), so it is a numba kernel
 on floats (no ``fastmath``, Python's ``min``/``max``: Python's numbers, bit
@@ -18,7 +18,6 @@ import math
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 from conesim.core.compiled import cached_njit
 from conesim.core.polyline import Polyline
@@ -62,7 +61,11 @@ class PolylineProgress:
         self.length = line.length
         step = float(np.median(self._lengths))
         self._window = max(2, math.ceil(window_m / step))
-        self._tree = cKDTree(line.points)
+        # The vertices' coordinates, for the nearest-vertex search (one
+        # vectorised pass over a few hundred points costs less than a k-d
+        # tree's query of one point).
+        self._vertex_x = np.ascontiguousarray(line.points[:, 0], dtype=float)
+        self._vertex_y = np.ascontiguousarray(line.points[:, 1], dtype=float)
         # Plain-float copies for the scalar walk (faster than numpy per element).
         self._starts_list = [(float(a), float(b)) for a, b in self._starts]
         self._tangents_list = [(float(a), float(b)) for a, b in self._tangents]
@@ -108,7 +111,7 @@ class PolylineProgress:
         vertex: (segment, distance^2, the foot's arc position u, perpendicular offset)."""
         p = np.array([px, py])
         n = len(self._starts)
-        _, nearest = self._tree.query(p)
+        nearest = _nearest_vertex(self._vertex_x, self._vertex_y, px, py)
         idx = np.arange(int(nearest) - self._window, int(nearest) + self._window + 1)
         idx = np.mod(idx, n) if self.closed else idx[(idx >= 0) & (idx < n)]
         rel = p - self._starts[idx]
@@ -162,6 +165,16 @@ class PolylineProgress:
         distance^2, the foot's arc position u, perpendicular offset)."""
         j, d2, u, lateral = _walk(self._segments, px, py, i, self.closed)
         return int(j), d2, u, lateral
+
+
+def _nearest_vertex(xs: NDArray[np.float64], ys: NDArray[np.float64], px: float, py: float) -> int:
+    """Index of the vertex (xs, ys) nearest to (px, py), the first of equals."""
+    dx = xs - px
+    dy = ys - py
+    dx *= dx
+    dy *= dy
+    dx += dy
+    return int(np.argmin(dx))
 
 
 @_compiled
