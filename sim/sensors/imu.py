@@ -158,8 +158,8 @@ class ImuSensor:
         self._count = 0
         dt = 0.0 if self._last_t is None else t - self._last_t
         self._last_t = t
-        bg = self._gyro_bias.step(dt).tolist()[0]
-        ba0, ba1 = self._accel_bias.step(dt).tolist()
+        (bg,) = self._gyro_bias.step(dt)
+        ba0, ba1 = self._accel_bias.step(dt)
         sg, sa, dg, da = self._sigmas()
         wg = float(self._gyro_white.standard_normal())
         wa0, wa1 = self._accel_white.standard_normal(2).tolist()

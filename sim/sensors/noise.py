@@ -84,6 +84,10 @@ class GaussMarkov:
 class BiasRandomWalk:
     """Random-walk bias ``b += K sqrt(dt) w`` starting at zero (a calibrated sensor).
 
+    The bias is held as plain floats: the IMU steps two walks at every
+    capture, where numpy's cost per call on one or two numbers exceeds the
+    work (the same operations, component by component).
+
     Args:
         density: random-walk density K [unit/sqrt(s)], >= 0.
         rng: the generator of this process's own stream.
@@ -94,18 +98,24 @@ class BiasRandomWalk:
         check_non_negative("BiasRandomWalk", "density", density)
         self.density = density
         self._rng = rng
-        self.value: NDArray[np.float64] = np.zeros(dim)
+        self._shape = (dim,)
+        self._value: tuple[float, ...] = (0.0,) * dim
 
-    def step(self, dt: float) -> NDArray[np.float64]:
-        """Advance by ``dt`` [s] (>= 0) and return the new value, shape (dim,)."""
+    @property
+    def value(self) -> NDArray[np.float64]:
+        """The bias now, shape (dim,) (a new array)."""
+        return np.array(self._value)
+
+    def step(self, dt: float) -> tuple[float, ...]:
+        """Advance by ``dt`` [s] (>= 0) and return the new value, dim floats."""
         if not (dt >= 0.0 and math.isfinite(dt)):
             check_non_negative("BiasRandomWalk.step", "dt", dt, "[s]")
         if self.density != 0.0:
-            w = self._rng.standard_normal(self.value.shape)
-            self.value = self.value + self.density * math.sqrt(dt) * w
+            k = self.density * math.sqrt(dt)
+            w = self._rng.standard_normal(self._shape).tolist()
+            self._value = tuple(b + k * wi for b, wi in zip(self._value, w, strict=True))
         # else b + 0 * w is b bit for bit (b starts at +0 and w is finite), so
         # nothing is drawn: the walk's stream is its own (no other draw moves)
         # and its density is fixed for its life (the IMU calibrated to zero,
         # every step of the ideal and rtk profiles; no per-step draw for it).
-        # A caller gets its own array either way, never the walk's state.
-        return self.value.copy()
+        return self._value
