@@ -191,7 +191,7 @@ class ConeDetector:
         truth: TruthSample, max_range: float
     ) -> tuple[NDArray[np.intp], NDArray[np.float64], NDArray[np.float64], NDArray[np.intp]]:
         """Cones within ``max_range`` of the sensor: indices, radii, heights, kind codes."""
-        centre = np.array([truth.antenna_pose.x, truth.antenna_pose.y])
+        centre = (truth.antenna_pose.x, truth.antenna_pose.y)
         cmap = truth.cone_map
         if cmap is not None:
             idx = cmap.query(centre, max_range)

@@ -81,17 +81,13 @@ class ConeMap:
         self.radii = cone_radii(self.kinds)
         self.heights = cone_heights(self.kinds)
         self.codes = kind_codes(self.kinds)
-        self._set(p)
-
-    def _set(self, p: NDArray[np.float64]) -> None:
-        """Hold a copy of the (n, 2) positions, with its coordinates as columns."""
         self._positions = p.copy()
-        self._x = self._positions[:, 0]
+        self._x = self._positions[:, 0]  # views: current after every update
         self._y = self._positions[:, 1]
 
     @property
     def positions(self) -> NDArray[np.float64]:
-        """Current (n, 2) positions [m] (read-only view)."""
+        """Current (n, 2) positions [m] (a read-only view; later updates show through it)."""
         view = self._positions.view()
         view.flags.writeable = False
         return view
@@ -100,11 +96,12 @@ class ConeMap:
         return len(self._positions)
 
     def update(self, positions: ArrayLike) -> None:
-        """Record the current positions (same cones, same order), (n, 2) [m]: an O(n) copy."""
-        p = as_positions(positions, "ConeMap.update")
+        """Record the current positions (same cones, same order), (n, 2) [m]: an O(n)
+        copy into the map's own array (the world calls it each step a cone moved)."""
+        p = np.asarray(positions, dtype=float)
         if p.shape != self._positions.shape:
             raise ValueError(f"ConeMap.update: expected {self._positions.shape}, got {p.shape}")
-        self._set(p)
+        np.copyto(self._positions, p)
 
     def query(self, center: ArrayLike, radius: float) -> NDArray[np.intp]:
         """Indices of the cones within ``radius`` [m] of ``center`` (2,), ascending.
@@ -112,7 +109,7 @@ class ConeMap:
         A cone is in range when dx^2 + dy^2 <= radius^2 (the squares and the
         sum in that order, as ``np.sum((p - c) ** 2, axis=1)`` takes them).
         """
-        cx, cy = (float(v) for v in np.asarray(center, dtype=float))
+        cx, cy = np.asarray(center, dtype=float).tolist()
         dx = self._x - cx
         dy = self._y - cy
         dx *= dx
