@@ -53,8 +53,12 @@ class LocalizationStep:
         transform: the ``reference -> gps_antenna`` transform broadcast, or None.
     """
 
-    local_xy: list[PointStamped]
+    local_xy: tuple[PointStamped, ...]
     transform: TransformStamped | None
+
+
+# What most ticks pass on (no fix delivered, no broadcast due): one shared, immutable step.
+_QUIET = LocalizationStep((), None)
 
 
 class Localizer:
@@ -115,8 +119,11 @@ class Localizer:
             messages: the measurements delivered now, in stamp order.
             truth: the antenna's true pose now (published in ``truth`` mode only).
         """
-        points = self.handle(messages) if messages else []  # most ticks deliver nothing
-        return LocalizationStep(points, self.broadcaster.step(t, truth))
+        points = tuple(self.handle(messages)) if messages else ()  # most ticks deliver nothing
+        transform = self.broadcaster.step(t, truth)
+        if not points and transform is None:
+            return _QUIET
+        return LocalizationStep(points, transform)
 
     def handle(self, messages: list[Message]) -> list[PointStamped]:
         """Each message to the ROS pipeline's nodes and the filter; the ``/local_xy`` points."""

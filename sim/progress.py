@@ -5,11 +5,13 @@ answer it walks to the neighbouring segment while that one is closer (a few
 scalar steps per physics step, since the car moves centimetres). A
 figure-of-eight (skidpad) or a hairpin whose legs lie close together therefore
 never makes the car jump to the other leg. The first query (or one after a
-reset) searches globally with a ``cKDTree`` and then a window of segments.
+reset) searches globally: the nearest vertex, then a window of segments around it.
 
-The walk runs at every physics step (race control), so it is a numba kernel
-on floats (no ``fastmath``, Python's ``min``/``max``: Python's numbers, bit
-for bit; ``tests/sim/test_step_fast_paths.py`` compares it with ``project``).
+The walk runs at every physics step (race control), and the search each metre
+the car moves off the track, so both are numba kernels on floats (no
+``fastmath``, Python's ``min``/``max``: the numbers of their plain
+formulations bit for bit; ``tests/sim/test_step_fast_paths.py`` compares them
+with those, kept in ``tests/sim/progress_reference.py``).
 """
 
 from __future__ import annotations
@@ -18,7 +20,6 @@ import math
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 from conesim.core.compiled import cached_njit
 from conesim.core.polyline import Polyline
@@ -62,7 +63,8 @@ class PolylineProgress:
         self.length = line.length
         step = float(np.median(self._lengths))
         self._window = max(2, math.ceil(window_m / step))
-        self._tree = cKDTree(line.points)
+        self._vertices = np.ascontiguousarray(line.points, dtype=float)  # (m, 2), the search's
+        self._vertices.setflags(write=False)
         # Plain-float copies for the scalar walk (faster than numpy per element).
         self._starts_list = [(float(a), float(b)) for a, b in self._starts]
         self._tangents_list = [(float(a), float(b)) for a, b in self._tangents]
@@ -75,6 +77,7 @@ class PolylineProgress:
         # The walk's kernels compile (or load) now, not in the first step (a pure call).
         sx, sy = self._starts_list[0]
         _walked(self._segments, self._s0_array, sx, sy, 0, self.closed)
+        _search(self._vertices, self._segments, sx, sy, self._window, self.closed)
         self._last: int | None = None
 
     def reset(self) -> None:
@@ -106,20 +109,10 @@ class PolylineProgress:
     def _search(self, px: float, py: float) -> tuple[int, float, float, float]:
         """The nearest of the segments within the window around the nearest
         vertex: (segment, distance^2, the foot's arc position u, perpendicular offset)."""
-        p = np.array([px, py])
-        n = len(self._starts)
-        _, nearest = self._tree.query(p)
-        idx = np.arange(int(nearest) - self._window, int(nearest) + self._window + 1)
-        idx = np.mod(idx, n) if self.closed else idx[(idx >= 0) & (idx < n)]
-        rel = p - self._starts[idx]
-        u = np.clip(np.einsum("ij,ij->i", rel, self._tangents[idx]), 0.0, self._lengths[idx])
-        foot = self._starts[idx] + self._tangents[idx] * u[:, None]
-        d2 = np.sum((p - foot) ** 2, axis=1)
-        k = int(np.argmin(d2))
-        seg = int(idx[k])
-        t = self._tangents[seg]
-        r = p - foot[k]
-        return seg, float(d2[k]), float(u[k]), float(t[0] * r[1] - t[1] * r[0])
+        seg, d2, u, lateral = _search(
+            self._vertices, self._segments, px, py, self._window, self.closed
+        )
+        return int(seg), d2, u, lateral
 
     def restart_at(self, index: int) -> None:
         """Go on walking from segment ``index`` (as if the last answer had been there)."""
@@ -174,6 +167,38 @@ class PolylineProgress:
         distance^2, the foot's arc position u, perpendicular offset)."""
         j, d2, u, lateral = _walk(self._segments, px, py, i, self.closed)
         return int(j), d2, u, lateral
+
+
+@_compiled
+def _search(vertices, segments, px, py, window, closed):  # noqa: PLR0917
+    """:meth:`PolylineProgress._search`, compiled: the segments ``nearest - window``
+    to ``nearest + window`` around the vertex nearest to (px, py) (the first of
+    equals; wrapped on a loop, clipped on an open line), and of those the nearest
+    (the first of equals, in that order). Race control searches the whole line
+    each metre the car moves off the track."""
+    nearest = 0
+    best = math.inf
+    for k in range(vertices.shape[0]):
+        dx, dy = vertices[k, 0] - px, vertices[k, 1] - py
+        d2 = dx * dx + dy * dy
+        if d2 < best:
+            nearest, best = k, d2
+    n = segments.shape[0]
+    seg, best_d2, best_u, best_lat = -1, math.inf, 0.0, 0.0
+    for k in range(nearest - window, nearest + window + 1):
+        j = k % n if closed else k
+        if not 0 <= j < n:
+            continue
+        sx, sy, tx, ty, length = (
+            segments[j, 0], segments[j, 1], segments[j, 2], segments[j, 3], segments[j, 4]
+        )  # fmt: skip
+        rx, ry = px - sx, py - sy
+        u = py_min(py_max(rx * tx + ry * ty, 0.0), length)
+        fx, fy = px - (sx + tx * u), py - (sy + ty * u)
+        d2 = fx * fx + fy * fy
+        if seg < 0 or d2 < best_d2:
+            seg, best_d2, best_u, best_lat = j, d2, u, tx * fy - ty * fx
+    return seg, best_d2, best_u, best_lat
 
 
 @_compiled

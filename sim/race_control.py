@@ -57,7 +57,7 @@ def _probe() -> None:
 _compiled = cached_njit(_probe, "conesim.sim.race_control")
 
 # [m] far above any round-off of the per-step tests, far below any footprint
-# or step: the quick rejections of ``_off`` and ``_crossed`` keep this much
+# or step: the quick answers of ``_off`` and ``_crossed`` keep this much
 # away from the cases they leave to the full test.
 _QUICK_MARGIN = 0.01
 
@@ -176,7 +176,8 @@ class RaceControl:
         self._line_xy = (lx[0], lx[1], lx[2], lx[3])
         self._finish_xy = (fx[0], fx[1], fx[2], fx[3])
         # A CG at least this far inside both boundaries has all four corners
-        # inside (no corner is farther from the CG): ``_off`` is False at once.
+        # inside (no corner is farther from the CG): ``_off`` is False at once;
+        # one this far beyond a boundary has all four beyond it: True at once.
         self._corner_reach = math.hypot(hl, hw) + _QUICK_MARGIN
         # The lines' bounding boxes, grown by the margin: a step outside a
         # box does not cross its line (``_crossed`` skips the full test).
@@ -269,6 +270,8 @@ class RaceControl:
         half = halves[min(index, len(halves) - 1)]
         if abs(lateral) + self._corner_reach < half:
             return False  # every corner within a corner's reach of the CG, inside
+        if abs(lateral) - self._corner_reach > half:
+            return True  # every corner within that reach, beyond the CG's boundary
         hl, hw = self._half_footprint
         return bool(_corners_off(lateral, tx, ty, yaw, half, hl, hw))
 

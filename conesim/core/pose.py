@@ -29,6 +29,8 @@ def wrap_angle(angle: ArrayLike) -> NDArray[np.float64] | float:
     >>> wrap_angle(np.array([0.0, 2 * math.pi + 0.5]))
     array([0. , 0.5])
     """
+    if type(angle) is float:  # the same arithmetic on a float, without numpy's overhead
+        return (angle + math.pi) % (2.0 * math.pi) - math.pi
     a = np.asarray(angle, dtype=float)
     wrapped = (a + math.pi) % (2.0 * math.pi) - math.pi
     if wrapped.ndim == 0:

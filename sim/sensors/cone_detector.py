@@ -191,7 +191,7 @@ class ConeDetector:
         truth: TruthSample, max_range: float
     ) -> tuple[NDArray[np.intp], NDArray[np.float64], NDArray[np.float64], NDArray[np.intp]]:
         """Cones within ``max_range`` of the sensor: indices, radii, heights, kind codes."""
-        centre = np.array([truth.antenna_pose.x, truth.antenna_pose.y])
+        centre = (truth.antenna_pose.x, truth.antenna_pose.y)
         cmap = truth.cone_map
         if cmap is not None:
             idx = cmap.query(centre, max_range)
@@ -212,7 +212,7 @@ class ConeDetector:
         if cfg.occlusion:
             visible &= ~occluded(r, b, radii, visible)
         vis = np.flatnonzero(visible)
-        sel = vis[self._detect.random(vis.size) < cfg.detection_probability(r[vis])]
+        sel = vis if self._sure_detection() else self._detected(vis, r[vis])
 
         r_sel = r[sel]
         xy = self._add_noise(local[sel], r_sel)
@@ -234,14 +234,36 @@ class ConeDetector:
             colours = self._colours(det_codes, true_r)
 
         order = np.argsort(np.hypot(points_xy[:, 0], points_xy[:, 1]), kind="stable")
-        points = np.column_stack([points_xy, z])[order]
+        points = np.empty((z.size, 3))
+        points[:, :2] = points_xy
+        points[:, 2] = z
+        points = points[order]
         if colours is not None:
             colours = tuple(colours[i] for i in order.tolist())
         return ConeDetections(Header(truth.t, FRAME_OS_SENSOR), points, colours)
 
-    def _add_noise(self, xy: NDArray[np.float64], r: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Range and bearing noise on (m, 2) points at ranges (m,) [m]."""
+    def _sure_detection(self) -> bool:
+        """Whether p(r) is 1 at every range (p0 >= 1, k = 0, the ideal profile):
+        every visible cone is detected, and nothing is drawn (the stream is
+        the detection's own, so no other draw moves)."""
         cfg = self.config
+        return cfg.detection_probability_at_zero >= 1.0 and cfg.detection_probability_slope == 0.0
+
+    def _detected(self, vis: NDArray[np.intp], r: NDArray[np.float64]) -> NDArray[np.intp]:
+        """The visible cones ``vis`` at ranges ``r`` [m] that the draws detect, p(r) each."""
+        return vis[self._detect.random(vis.size) < self.config.detection_probability(r)]
+
+    def _add_noise(self, xy: NDArray[np.float64], r: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Range and bearing noise on (m, 2) points at ranges (m,) [m].
+
+        Without noise (both sigmas zero, the ideal profile) the points
+        themselves, and nothing is drawn: the formula gives them bit for bit
+        (a scale of 1, a rotation by a signed zero), the streams are the
+        noise's own.
+        """
+        cfg = self.config
+        if cfg.range_sigma == 0.0 and cfg.bearing_sigma == 0.0:
+            return xy
         dr = cfg.range_sigma * self._range.standard_normal(r.size)
         db = cfg.bearing_sigma * self._bearing.standard_normal(r.size)
         scale = 1.0 + np.divide(dr, r, out=np.zeros_like(dr), where=r > 0.0)
@@ -256,9 +278,9 @@ class ConeDetector:
         """Poisson-many points uniform over the field of view: (k, 2) [m], (k,) ranges."""
         cfg = self.config
         n = int(self._false.poisson(cfg.false_positive_rate))
-        u = self._false.random((n, 2))
-        if n == 0:
+        if n == 0:  # (drawing none would not move the stream either)
             return _NO_POINTS, _NO_RANGES
+        u = self._false.random((n, 2))
         r = np.sqrt(cfg.min_range**2 + u[:, 0] * (cfg.max_range**2 - cfg.min_range**2))
         b = (u[:, 1] - 0.5) * cfg.fov
         return np.column_stack([r * np.cos(b), r * np.sin(b)]), r

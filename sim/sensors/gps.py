@@ -35,6 +35,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from conesim.core.geodesy import (
     DEFAULT_ORIGIN,
@@ -138,6 +139,7 @@ class GpsReceiver:
     ) -> None:
         self.config = config
         self.origin = origin
+        self._cov_cache: tuple[GpsConfig, NDArray[np.float64]] | None = None
         self.reset(seed)
 
     def reset(self, seed: int) -> None:
@@ -149,24 +151,40 @@ class GpsReceiver:
         )
         self._last_t: float | None = None
 
-    def _draw_error(self, t: float) -> np.ndarray:
-        """Draw the east/north error [m], shape (2,), of a capture at ``t`` [s]."""
-        bias = self._bias.value if self._last_t is None else self._bias.step(t - self._last_t)
+    def _draw_error(self, t: float) -> tuple[float, float]:
+        """Draw the east/north error [m] of a capture at ``t`` [s] (plain floats)."""
+        bias = self._bias.state if self._last_t is None else self._bias.step(t - self._last_t)
         self._last_t = t
-        e = bias + self.config.white_sigma * self._white.standard_normal(2)
-        u, angle = self._multipath.random(2)
-        if u < self.config.multipath_probability:
-            direction = np.array([math.cos(2 * math.pi * angle), math.sin(2 * math.pi * angle)])
-            e = e + self.config.multipath_magnitude * direction
-        rate = self.config.drift_rate
-        if rate != (0.0, 0.0) and t > self.config.drift_start:  # without a drift: e itself
-            e = e + np.array(rate) * (t - self.config.drift_start)
-        return e
+        cfg = self.config
+        w0, w1 = self._white.standard_normal(2).tolist()
+        ex, ey = bias[0] + cfg.white_sigma * w0, bias[1] + cfg.white_sigma * w1
+        u, angle = self._multipath.random(2).tolist()
+        if u < cfg.multipath_probability:
+            mag = cfg.multipath_magnitude
+            ex += mag * math.cos(2 * math.pi * angle)
+            ey += mag * math.sin(2 * math.pi * angle)
+        rate = cfg.drift_rate
+        if rate != (0.0, 0.0) and t > cfg.drift_start:  # without a drift: e itself
+            ex += rate[0] * (t - cfg.drift_start)
+            ey += rate[1] * (t - cfg.drift_start)
+        return ex, ey
+
+    def _covariance(self) -> NDArray[np.float64]:
+        """The stated (3, 3) covariance of the current config, built once per config
+        (read-only: every fix of the config shares it)."""
+        cfg = self.config
+        cached = self._cov_cache
+        if cached is None or cached[0] is not cfg:
+            s = cfg.total_sigma if cfg.reported_sigma is None else cfg.reported_sigma
+            cov = np.diag([s * s, s * s, (VERTICAL_TO_HORIZONTAL * s) ** 2])
+            cov.flags.writeable = False
+            cached = self._cov_cache = (cfg, cov)
+        return cached[1]
 
     def capture(self, truth: TruthSample) -> NavSatFix | None:
         """The fix of a capture at ``truth.t``, or None in a silent dropout."""
         cfg = self.config
-        e = self._draw_error(truth.t)
+        ex, ey = self._draw_error(truth.t)
         header = Header(stamp=truth.t, frame_id=FRAME_GPS_ANTENNA)
         if cfg.in_dropout(truth.t):
             if cfg.dropout_mode == "silent":
@@ -176,10 +194,8 @@ class GpsReceiver:
                 header, nan, nan, nan, np.full((3, 3), nan), status=NavSatStatus.NO_FIX
             )
         pose = truth.antenna_pose
-        lat, lon = self._to_gps(float(pose.x + e[0]), float(pose.y + e[1]))
-        s = cfg.total_sigma if cfg.reported_sigma is None else cfg.reported_sigma
-        cov = np.diag([s * s, s * s, (VERTICAL_TO_HORIZONTAL * s) ** 2])
-        return NavSatFix(header, lat, lon, self.origin.alt_m, cov, cfg.fix_status)
+        lat, lon = self._to_gps(pose.x + ex, pose.y + ey)
+        return NavSatFix(header, lat, lon, self.origin.alt_m, self._covariance(), cfg.fix_status)
 
     def _to_gps(self, x: float, y: float) -> tuple[float, float]:
         """``local_cartesian_to_gps`` of one point on plain floats: (lat, lon) [deg].

@@ -79,9 +79,9 @@ class HeadingSensor:
     def capture(self, truth: TruthSample) -> HeadingStamped | None:
         """The heading of a capture at ``truth.t``, or None in a dropout."""
         cfg = self.config
-        bias = self._bias.value if self._last_t is None else self._bias.step(truth.t - self._last_t)
+        bias = self._bias.state if self._last_t is None else self._bias.step(truth.t - self._last_t)
         self._last_t = truth.t
-        noise = float(bias[0]) + cfg.white_sigma * float(self._white.standard_normal())
+        noise = bias[0] + cfg.white_sigma * float(self._white.standard_normal())
         if cfg.dropouts and in_windows(truth.t, cfg.dropouts):
             return None
         yaw = float(wrap_angle(truth.antenna_pose.yaw + noise))

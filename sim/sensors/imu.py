@@ -158,13 +158,20 @@ class ImuSensor:
         self._count = 0
         dt = 0.0 if self._last_t is None else t - self._last_t
         self._last_t = t
-        bg = self._gyro_bias.step(dt).tolist()[0]
-        ba0, ba1 = self._accel_bias.step(dt).tolist()
+        (bg,) = self._gyro_bias.step(dt)
+        ba0, ba1 = self._accel_bias.step(dt)
         sg, sa, dg, da = self._sigmas()
-        wg = float(self._gyro_white.standard_normal())
-        wa0, wa1 = self._accel_white.standard_normal(2).tolist()
-        gyro = yaw_rate + bg + dg * wg
-        ax, ay = accel_x + ba0 + da * wa0, accel_y + ba1 + da * wa1
+        gyro = yaw_rate + bg
+        ax, ay = accel_x + ba0, accel_y + ba1
+        # Without white noise (the ideal profile) nothing is drawn: sigma times
+        # a draw is a signed zero, and adding one to these sums (never -0.0, as
+        # b starts at +0) leaves them as they are, bit for bit; each stream is
+        # its own, so no other draw moves.
+        if dg != 0.0:
+            gyro += dg * float(self._gyro_white.standard_normal())
+        if da != 0.0:
+            wa0, wa1 = self._accel_white.standard_normal(2).tolist()
+            ax, ay = ax + da * wa0, ay + da * wa1
         cfg = self.config
         if cfg.gyro_bias != 0.0:  # without one, the sum itself (bit for bit)
             gyro += cfg.gyro_bias

@@ -56,11 +56,19 @@ def white_sigma(density: float, dt: float) -> float:
 class GaussMarkov:
     """First-order Gauss-Markov process, exactly discretised (see module docstring).
 
+    The process is held as plain floats (``state``): the GPS and heading
+    models step theirs at every capture, on one or two numbers, where numpy's
+    cost per call exceeds the work (the same operations, component by
+    component).
+
     Args:
         sigma: stationary std [unit], >= 0.
         tau: correlation time [s], > 0.
         rng: the generator of this process's own stream.
         dim: number of independent components (e.g. 2 for east/north).
+
+    Attributes:
+        state: the process now, dim floats.
     """
 
     def __init__(self, sigma: float, tau: float, rng: np.random.Generator, dim: int = 1) -> None:
@@ -69,43 +77,65 @@ class GaussMarkov:
         self.sigma = sigma
         self.tau = tau
         self._rng = rng
-        self.value: NDArray[np.float64] = sigma * rng.standard_normal(dim)
+        self._shape = (dim,)
+        self.state: tuple[float, ...] = tuple(
+            [sigma * w for w in rng.standard_normal(dim).tolist()]
+        )
 
-    def step(self, dt: float) -> NDArray[np.float64]:
-        """Advance by ``dt`` [s] (>= 0) and return the new value, shape (dim,)."""
+    @property
+    def value(self) -> NDArray[np.float64]:
+        """The process now, shape (dim,) (a new array)."""
+        return np.array(self.state)
+
+    def step(self, dt: float) -> tuple[float, ...]:
+        """Advance by ``dt`` [s] (>= 0) and return the new value, dim floats."""
         if not (dt >= 0.0 and math.isfinite(dt)):
             check_non_negative("GaussMarkov.step", "dt", dt, "[s]")
         phi = math.exp(-dt / self.tau)
-        w = self._rng.standard_normal(self.value.shape)
-        self.value = phi * self.value + self.sigma * math.sqrt(1.0 - phi * phi) * w
-        return self.value
+        w = self._rng.standard_normal(self._shape).tolist()
+        k = self.sigma * math.sqrt(1.0 - phi * phi)
+        self.state = tuple([phi * b + k * wi for b, wi in zip(self.state, w, strict=True)])
+        return self.state
 
 
 class BiasRandomWalk:
     """Random-walk bias ``b += K sqrt(dt) w`` starting at zero (a calibrated sensor).
 
+    The bias is held as plain floats (``state``): the IMU steps two walks at
+    every capture, where numpy's cost per call on one or two numbers exceeds
+    the work (the same operations, component by component).
+
     Args:
         density: random-walk density K [unit/sqrt(s)], >= 0.
         rng: the generator of this process's own stream.
         dim: number of independent components.
+
+    Attributes:
+        state: the bias now, dim floats.
     """
 
     def __init__(self, density: float, rng: np.random.Generator, dim: int = 1) -> None:
         check_non_negative("BiasRandomWalk", "density", density)
         self.density = density
         self._rng = rng
-        self.value: NDArray[np.float64] = np.zeros(dim)
+        self._shape = (dim,)
+        self.state: tuple[float, ...] = (0.0,) * dim
 
-    def step(self, dt: float) -> NDArray[np.float64]:
-        """Advance by ``dt`` [s] (>= 0) and return the new value, shape (dim,)."""
+    @property
+    def value(self) -> NDArray[np.float64]:
+        """The bias now, shape (dim,) (a new array)."""
+        return np.array(self.state)
+
+    def step(self, dt: float) -> tuple[float, ...]:
+        """Advance by ``dt`` [s] (>= 0) and return the new value, dim floats."""
         if not (dt >= 0.0 and math.isfinite(dt)):
             check_non_negative("BiasRandomWalk.step", "dt", dt, "[s]")
         if self.density != 0.0:
-            w = self._rng.standard_normal(self.value.shape)
-            self.value = self.value + self.density * math.sqrt(dt) * w
+            k = self.density * math.sqrt(dt)
+            w = self._rng.standard_normal(self._shape).tolist()
+            self.state = tuple([b + k * wi for b, wi in zip(self.state, w, strict=True)])
         # else b + 0 * w is b bit for bit (b starts at +0 and w is finite), so
         # nothing is drawn: the walk's stream is its own (no other draw moves)
         # and its density is fixed for its life (the IMU calibrated to zero,
         # every step of the ideal and rtk profiles; no per-step draw for it).
-        # A caller gets its own array either way, never the walk's state.
-        return self.value.copy()
+        return self.state

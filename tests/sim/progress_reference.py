@@ -1,14 +1,18 @@
-"""The projection walk's readable formulation, the reference its kernel is checked against.
+"""The projection's readable formulations, the references its kernels are checked against.
 
-``sim.progress`` walks from segment to segment in a numba kernel; these are
-the plain-Python functions it replaced (``PolylineProgress._walk`` on the
-segments as tuples of floats, and ``_offset``), kept here so that
-``test_step_fast_paths.py`` compares the kernel with them bit for bit.
+``sim.progress`` walks from segment to segment and searches the whole line in
+numba kernels; these are the functions they replaced (``PolylineProgress._walk``
+on the segments as tuples of floats, ``_offset``, and the numpy search),
+kept here so that ``test_step_fast_paths.py`` compares the kernels with them
+bit for bit.
 """
 
 from __future__ import annotations
 
 import math
+
+import numpy as np
+from numpy.typing import NDArray
 
 
 def walk(
@@ -55,3 +59,32 @@ def offset(lateral: float, d2: float, u: float, length: float) -> float:
     if 0.0 < u < length:
         return lateral
     return math.copysign(math.sqrt(d2), lateral)
+
+
+def search(
+    vertices: NDArray[np.float64],
+    segments: NDArray[np.float64],
+    px: float,
+    py: float,
+    *,
+    window: int,
+    closed: bool,
+) -> tuple[int, float, float, float]:
+    """The nearest of the segments (n, 5: start, unit tangent, length) within
+    ``window`` segments of the vertex (m, 2) nearest to (px, py): (segment,
+    distance^2, the foot's arc position u, perpendicular offset), in numpy."""
+    p = np.array([px, py])
+    n = len(segments)
+    starts, tangents, lengths = segments[:, :2], segments[:, 2:4], segments[:, 4]
+    nearest = int(np.argmin(np.sum((vertices - p) ** 2, axis=1)))
+    idx = np.arange(nearest - window, nearest + window + 1)
+    idx = np.mod(idx, n) if closed else idx[(idx >= 0) & (idx < n)]
+    rel = p - starts[idx]
+    u = np.clip(np.einsum("ij,ij->i", rel, tangents[idx]), 0.0, lengths[idx])
+    foot = starts[idx] + tangents[idx] * u[:, None]
+    d2 = np.sum((p - foot) ** 2, axis=1)
+    k = int(np.argmin(d2))
+    seg = int(idx[k])
+    t = tangents[seg]
+    r = p - foot[k]
+    return seg, float(d2[k]), float(u[k]), float(t[0] * r[1] - t[1] * r[0])

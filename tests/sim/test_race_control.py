@@ -309,3 +309,20 @@ def test_quick_rejections_answer_as_the_full_tests() -> None:
         if race_control._outside(p0, p1, rc._line_box):
             assert segment_crossing_xy(p0, p1, rc._line_xy) is None
     assert quick > 300  # the shortcut was taken
+
+
+def test_off_track_quick_answers_are_the_corner_test() -> None:
+    """Both quick answers of ``_off`` (well inside, well beyond) agree with the four corners."""
+    rc = circle_control()
+    rng = np.random.default_rng(3)
+    hl, hw = rc._half_footprint
+    half = rc._half_widths_list[0]
+    for lateral, yaw, angle in zip(
+        rng.uniform(-3 * half, 3 * half, 4000),
+        rng.uniform(-math.pi, math.pi, 4000),
+        rng.uniform(-math.pi, math.pi, 4000),
+        strict=True,
+    ):
+        tx, ty = math.cos(angle), math.sin(angle)
+        full = bool(race_control._corners_off(lateral, tx, ty, yaw, half, hl, hw))
+        assert rc._off(float(lateral), 0, tx, ty, float(yaw)) == full

@@ -54,8 +54,8 @@ def test_zero_sigma_processes_stay_exactly_zero() -> None:
     gm = GaussMarkov(0.0, 1.0, np.random.default_rng(3), dim=2)
     walk = BiasRandomWalk(0.0, np.random.default_rng(3), dim=2)
     for _ in range(5):
-        assert np.all(gm.step(0.1) == 0.0)
-        assert np.all(walk.step(0.1) == 0.0)
+        assert gm.step(0.1) == (0.0, 0.0)
+        assert walk.step(0.1) == (0.0, 0.0)
 
 
 def test_stream_keys_are_stable_and_streams_differ() -> None:
