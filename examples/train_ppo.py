@@ -33,8 +33,8 @@ The settings, and why (the defaults are the measured baseline):
   global path's next 30 m in the car's frame, ``envs.observation``): with
   the cones of the last scan alone (and seeds 0-999, ``gamma`` 0.99,
   ``ent_coef`` 0), 1 held-out lap in 20 after 26 min; with all of these,
-  3 in 20 in the same time with half the steps (one PPO seed each;
-  docs/TRAINING.md).
+  3 and 6 in 20 (two PPO seeds) in the same time with half the steps
+  (docs/TRAINING.md).
   ``--path-preview 0`` drops it. The env's default reward (+1 per metre, -1
   per second, the FS penalties) and its normalised vector observation.
 - ``--train-seeds`` 0-199: 200 tracks (about 3,000 corners) are variety
