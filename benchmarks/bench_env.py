@@ -66,6 +66,12 @@ CONFIGS: tuple[tuple[str, dict[str, Any], int | None], ...] = (
         {"sensors": "ideal", "localization": "truth", "physics_rate": 100.0},
         None,
     ),
+    # What the training baseline's path preview adds to the env layer.
+    (
+        "ideal sensors, truth, path preview 10 x 3 m",
+        {"sensors": "ideal", "localization": "truth", "path_preview": 10, "path_preview_step": 3.0},
+        None,
+    ),
 )
 VEC_TARGET = 1.6  # issue 17: 2 workers on 2 cores give at least this times one env
 REPEATS = 3  # rounds of the layers in ``layer_rates``
