@@ -99,8 +99,15 @@ class Polyline:
         A closed polyline wraps the stations modulo :attr:`end_station`; an
         open one clamps them to its ends.
         """
-        query, cum, pts = self._wrap(stations), self.stations, self.ring
-        return np.column_stack([np.interp(query, cum, pts[:, 0]), np.interp(query, cum, pts[:, 1])])
+        query, cum, (x, y) = self._wrap(stations), self.stations, self._ring_columns
+        return np.column_stack([np.interp(query, cum, x), np.interp(query, cum, y)])
+
+    @cached_property
+    def _ring_columns(self) -> tuple[FloatArray, FloatArray]:
+        """:attr:`ring`'s x and y, each contiguous (``np.interp`` copies a strided column
+        at every call)."""
+        ring = self.ring
+        return np.ascontiguousarray(ring[:, 0]), np.ascontiguousarray(ring[:, 1])
 
     def interpolate(self, values: FloatArray, stations: ArrayLike) -> FloatArray:
         """Values given at the points of :attr:`ring`, (k + 1,), at arc lengths
