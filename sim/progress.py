@@ -194,6 +194,7 @@ def _search(vertices, segments, px, py, window, closed):  # noqa: PLR0917
         )  # fmt: skip
         rx, ry = px - sx, py - sy
         u = py_min(py_max(rx * tx + ry * ty, 0.0), length)
+        # p - (start + t u), not the walk's (p - start) - t u: the numpy search's rounding
         fx, fy = px - (sx + tx * u), py - (sy + ty * u)
         d2 = fx * fx + fy * fy
         if seg < 0 or d2 < best_d2:
