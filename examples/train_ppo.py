@@ -77,10 +77,12 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+import yaml
 from matplotlib.figure import Figure
 
 import conesim
 from conesim.envs.cone_track_env import END_REASONS
+from conesim.envs.config import EnvConfig
 from conesim.envs.runner import run_scenario
 from conesim.tracks import GeneratedTrack, TrackGenerationError, load_track
 
@@ -356,7 +358,23 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         help="global path points ahead in the observation (0: none)",
     )  # fmt: skip
     p.add_argument("--seed", type=int, default=0, help="PPO's seed")
+    p.add_argument(
+        "--train-env", action="append", default=[], metavar="KEY=VALUE", type=env_setting,
+        help="a gym.make keyword for the training envs only, the value YAML "
+        "(e.g. stuck_time=3); the held-out evaluation keeps the env's own",
+    )  # fmt: skip
     return p.parse_args(argv)
+
+
+def env_setting(text: str) -> tuple[str, Any]:
+    """``KEY=VALUE`` as (key, the value read as YAML), for ``--train-env``."""
+    key, sep, value = text.partition("=")
+    if not sep or not key.strip():
+        raise argparse.ArgumentTypeError(f"--train-env {text!r}: expected KEY=VALUE")
+    try:
+        return key.strip(), yaml.safe_load(value)
+    except yaml.YAMLError as exc:
+        raise argparse.ArgumentTypeError(f"--train-env {text!r}: {exc}") from None
 
 
 def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
@@ -365,7 +383,13 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     torch.set_num_threads(1)
     seeds = (int(args.train_seeds[0]), int(args.train_seeds[1]))
     env_settings = {**ENV_SETTINGS, "path_preview": args.path_preview}
-    factories = [make_env(seeds, rank, env_settings) for rank in range(args.n_envs)]
+    train_settings = {**env_settings, **dict(args.train_env)}
+    try:
+        EnvConfig.from_dict({**train_settings, "track": "random", "track_seeds": seeds})
+    except (TypeError, ValueError) as exc:
+        print(f"train_ppo: --train-env: {exc}", file=sys.stderr)
+        raise SystemExit(2) from None
+    factories = [make_env(seeds, rank, train_settings) for rank in range(args.n_envs)]
     venv: VecEnv = (
         SubprocVecEnv(factories, start_method="fork")
         if args.vec == "subproc"
@@ -436,6 +460,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
         },
         "settings": {
             "env": {**env_settings, "track": "random", "track_seeds": list(seeds)},
+            "train_env": dict(args.train_env),
             "ppo": settings,
             "n_envs": args.n_envs,
             "vec": args.vec,

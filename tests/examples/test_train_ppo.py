@@ -27,7 +27,8 @@ def run(tmp_path_factory: pytest.TempPathFactory) -> Path:
         [sys.executable, str(SCRIPT), "--out", str(out), "--minutes", "0",
          "--steps", str(STEPS), "--n-steps", "256", "--batch-size", "128",
          "--n-envs", "2", "--vec", "subproc", "--eval-tracks", "2",
-         "--train-seeds", "0", "50"],
+         "--train-seeds", "0", "50", "--train-env", "stuck_time=4",
+         "--train-env", "stuck_grace=6"],
         capture_output=True, text=True, check=False, timeout=600, cwd=REPO,
     )  # fmt: skip
     assert done.returncode == 0, done.stdout + done.stderr
@@ -51,6 +52,9 @@ def test_the_json_has_the_figures(run: Path) -> None:
     assert STEPS <= training["steps"] < STEPS + 512
     assert training["steps_per_s"] > 0
     assert summary["settings"]["ppo"]["n_steps"] == 256
+    # the training envs' own rules are recorded; the evaluation's env keeps the defaults
+    assert summary["settings"]["train_env"] == {"stuck_time": 4, "stuck_grace": 6}
+    assert "stuck_time" not in summary["settings"]["env"]
     lines = (run / "curve.csv").read_text(encoding="utf-8").splitlines()
     assert lines[0].split(",")[:3] == ["step", "return", "progress_m"]
     assert training["episodes"] == len(lines) - 1 > 0
@@ -86,3 +90,22 @@ def test_the_policy_loads_and_drives(run: Path) -> None:
         if terminated or truncated:
             break
     env.close()
+
+
+@pytest.mark.parametrize(
+    ("flag", "said"),
+    [
+        ("stuck_time", "expected KEY=VALUE"),
+        ("rewards={time: [", "--train-env 'rewards={time: ['"),
+        ("stuck_tme=3", "unknown keys ['stuck_tme']"),
+        ("stuck_time=-1", "EnvConfig.stuck_time must be > 0 [s], got -1"),
+    ],
+)
+def test_a_bad_training_env_setting_is_one_line_and_exit_2(flag: str, said: str) -> None:
+    done = subprocess.run(
+        [sys.executable, str(SCRIPT), "--train-env", flag, "--steps", "1"],
+        capture_output=True, text=True, check=False, timeout=120, cwd=REPO,
+    )  # fmt: skip
+    assert done.returncode == 2
+    assert said in done.stderr
+    assert "Traceback" not in done.stderr
