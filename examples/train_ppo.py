@@ -77,13 +77,14 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-import yaml
 from matplotlib.figure import Figure
 
 import conesim
 from conesim.envs.cone_track_env import END_REASONS
 from conesim.envs.config import EnvConfig
+from conesim.envs.dataclass_io import FieldError
 from conesim.envs.runner import run_scenario
+from conesim.envs.yaml_io import parse_value
 from conesim.tracks import GeneratedTrack, TrackGenerationError, load_track
 
 try:
@@ -372,23 +373,23 @@ def env_setting(text: str) -> tuple[str, Any]:
     if not sep or not key.strip():
         raise argparse.ArgumentTypeError(f"--train-env {text!r}: expected KEY=VALUE")
     try:
-        return key.strip(), yaml.safe_load(value)
-    except yaml.YAMLError as exc:
-        raise argparse.ArgumentTypeError(f"--train-env {text!r}: {exc}") from None
+        return key.strip(), parse_value(value)
+    except FieldError as exc:
+        raise argparse.ArgumentTypeError(f"--train-env {text!r}: {exc.reason}") from None
 
 
 def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     args = parse_args(argv)
-    args.out.mkdir(parents=True, exist_ok=True)
-    torch.set_num_threads(1)
     seeds = (int(args.train_seeds[0]), int(args.train_seeds[1]))
     env_settings = {**ENV_SETTINGS, "path_preview": args.path_preview}
     train_settings = {**env_settings, **dict(args.train_env)}
-    try:
+    try:  # before anything is written
         EnvConfig.from_dict({**train_settings, "track": "random", "track_seeds": seeds})
     except (TypeError, ValueError) as exc:
         print(f"train_ppo: --train-env: {exc}", file=sys.stderr)
         raise SystemExit(2) from None
+    args.out.mkdir(parents=True, exist_ok=True)
+    torch.set_num_threads(1)
     factories = [make_env(seeds, rank, train_settings) for rank in range(args.n_envs)]
     venv: VecEnv = (
         SubprocVecEnv(factories, start_method="fork")
