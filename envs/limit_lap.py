@@ -52,6 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 from scipy.ndimage import uniform_filter1d
+from scipy.optimize import brentq
 
 from conesim.core.polyline import Polyline
 from conesim.envs.racing_line import MARGIN_M, Corridor, racing_lines, spline_grid
@@ -138,16 +139,27 @@ def qss_speed_profile(
 
 
 def _top_speed(p: VehicleParams) -> float:
-    """Speed where the drive force meets drag and rolling resistance [m/s]."""
-    v = 10.0
-    for _ in range(100):  # fixed point of P / v = drag(v) + roll
-        drive = min(p.max_drive_force, p.max_power / v)
-        down = 0.5 * p.air_density * p.lift_area * v * v
-        resist = 0.5 * p.air_density * p.drag_area * v * v + p.rolling_resistance * (
-            p.mass * p.gravity + down
-        )
-        v = v * (drive / resist) ** (1.0 / 3.0)
-    return v
+    """Speed where the drive force meets drag and rolling resistance [m/s]; inf for a
+    car with neither (``AxleLimits.resistance``, the physics' own).
+
+    ``min(F_max, P / v) - R(v)`` falls with v, and is positive at rest
+    (``VehicleParams`` requires the motor to beat the rolling resistance), so
+    the root is bracketed by doubling and found by scipy's ``brentq``.
+    """
+    axles = AxleLimits(p)
+    if axles.resistance(1.0) == 0.0:  # no drag, no rolling resistance: no top speed
+        return math.inf
+
+    def excess(v: float) -> float:
+        return min(p.max_drive_force, p.max_power / v) - axles.resistance(v)
+
+    hi = 1.0
+    while excess(hi) > 0.0:
+        hi *= 2.0
+    lo = hi / 2.0
+    while excess(lo) <= 0.0 and lo > 1e-9:  # a top speed below 1 m/s
+        lo /= 2.0
+    return float(brentq(excess, lo, hi, xtol=1e-9, rtol=1e-12))
 
 
 def limit_lap_time(

@@ -144,6 +144,13 @@ class VehicleParams:
             _check_range(
                 name, getattr(self, name), lo, hi, lo_incl=lo_incl, hi_incl=hi_incl, unit=unit
             )
+        rolling = self.rolling_resistance * self.mass * self.gravity
+        if not self.max_drive_force > rolling:
+            raise ValueError(
+                f"VehicleParams.max_drive_force = {self.max_drive_force!r} N does not move the "
+                f"car: the rolling resistance at rest, rolling_resistance * mass * gravity, "
+                f"is {rolling:.6g} N"
+            )
         for name in ("tyre_front", "tyre_rear"):
             if not isinstance(getattr(self, name), PacejkaParams):
                 raise ValueError(f"VehicleParams.{name} must be a PacejkaParams")

@@ -87,6 +87,21 @@ def test_top_speed_where_power_meets_drag() -> None:
     assert_allclose(p.max_power / v, resist, rtol=1e-6)
 
 
+def test_top_speed_with_rolling_resistance_alone_is_power_over_it() -> None:
+    """No air (no drag, no downforce): P / v = Crr m g, v = 20 kW / 27.96 N = 715 m/s."""
+    p = VehicleParams(air_density=0.0)
+    assert_allclose(_top_speed(p), p.max_power / (p.rolling_resistance * p.mass * p.gravity))
+
+
+def test_a_car_with_no_resistance_has_no_top_speed_and_a_finite_lap() -> None:
+    """No drag and no rolling resistance: no top speed, but the lap is still the
+    standing start at 3 m/s^2 (the demand limit), 75 m in 7.07 s."""
+    p = VehicleParams(drag_area=0.0, rolling_resistance=0.0)
+    assert _top_speed(p) == math.inf
+    lane = np.column_stack([np.linspace(0.0, 100.0, 201), np.zeros(201)])
+    assert_allclose(limit_lap_time(lane, False, p, timed_to_s=75.0), math.sqrt(50.0), rtol=1e-3)
+
+
 def test_acceleration_limit_matches_full_throttle_physics() -> None:
     """The acceleration lane's limit is the 6.010 s full-throttle run from 2 m behind the line
     (3 m/s^2 stays below the power limit over 77 m), to 2e-5: the spline's stations

@@ -58,3 +58,10 @@ def test_any_physical_car_is_accepted(mass: float, lf_ratio: float) -> None:
     """Positive mass and a CG between the axles are always valid."""
     p = VehicleParams(mass=mass, cg_to_front=lf_ratio * 1.53)
     assert p.cg_to_front + p.cg_to_rear == pytest.approx(1.53)
+
+
+def test_a_motor_that_cannot_beat_rolling_resistance_is_refused() -> None:
+    """0.015 * 190 kg * 9.81 m/s^2 = 27.96 N at rest: a 27 N motor never moves the car."""
+    with pytest.raises(ValueError, match=r"max_drive_force = 27\.0 N does not move.*27\.9585 N"):
+        VehicleParams(max_drive_force=27.0)
+    VehicleParams(max_drive_force=28.0)  # just enough
