@@ -50,7 +50,7 @@ from gymnasium.error import DependencyNotInstalled
 from conesim.core.geodesy import GeodesyError
 from conesim.envs.cli_parser import CliError, build_parser
 from conesim.envs.dataclass_io import FieldError
-from conesim.envs.paths import missing_dirs, nearest_existing, os_reason
+from conesim.envs.paths import missing_dirs, nearest_existing, os_reason, probe_writable
 from conesim.envs.progress import ProgressBar
 from conesim.envs.run_dir import RunDirError, check_run_dir, write_together
 from conesim.envs.run_plot import save_run_picture
@@ -58,6 +58,7 @@ from conesim.envs.track_plot import save_track_picture
 from conesim.envs.yaml_io import parse_value
 from conesim.tracks import (
     DEFAULT_TRACK,
+    Layout,
     Track,
     TrackFormatError,
     TrackSource,
@@ -306,7 +307,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise CliError(f"--out {exc}") from None
     if args.render:
         _check_render_extra()
-    save_map = _check_save_map(args.save_map, scenario)
+    save_map = _check_save_map(args.save_map, scenario, track)
     bar = ProgressBar(sys.stderr) if sys.stderr.isatty() and not args.json else None
     # What is the user's already, for removing the bag again: an empty
     # directory they made stays, parents made for the bag go.
@@ -334,23 +335,36 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.json:
         print(payload)
     else:
-        print(format_result(result, out, args.bag, args.scenario))
+        print(format_result(result, out, args.bag, args.scenario, save_map))
     return EXIT_OK if result.finished else EXIT_FAILED
 
 
-def _check_save_map(path: str | None, scenario: Scenario) -> Path | None:
-    """``--save-map``'s file, checked before the run (slam only; a .yaml file, not a directory)."""
+def _check_save_map(path: str | None, scenario: Scenario, track: Track) -> Path | None:
+    """``--save-map``'s file, checked before the run: slam only, not on a skidpad, a
+    .yaml file (not a directory) whose nearest existing folder can be written."""
     if path is None:
         return None
     if scenario.localization != "slam":
         raise CliError(
             f"--save-map needs --localization slam (the scenario's is {scenario.localization!r})"
         )
+    if track.layout == Layout.SKIDPAD:
+        raise CliError(
+            "--save-map: a skidpad's map after its first lap holds one of its two circles, "
+            "which no skidpad track file can be; map a loop or a lane"
+        )
     target = Path(path)
     if target.suffix not in (".yaml", ".yml"):
         raise CliError(f"--save-map {path}: a conesim track file ends in .yaml")
     if target.is_dir():
         raise CliError(f"--save-map {path}: is a directory")
+    base = nearest_existing(target.parent)
+    if not base.is_dir():
+        raise CliError(f"--save-map {path}: {base} is not a directory")
+    try:
+        probe_writable(base)
+    except OSError as exc:
+        raise CliError(f"--save-map {path}: cannot write there ({os_reason(exc)})") from None
     return target
 
 
@@ -416,16 +430,21 @@ def _write_outputs(
 
 
 def format_result(
-    result: RunResult, out: Path, bag: str | None = None, scenario: str | None = None
+    result: RunResult,
+    out: Path,
+    bag: str | None = None,
+    scenario: str | None = None,
+    saved_map: Path | None = None,
 ) -> str:
     """The results table ``conesim run`` prints (``bag``: the bag written, if any;
-    ``scenario``: the scenario file run, if any)."""
+    ``scenario``: the scenario file run, if any; ``saved_map``: ``--save-map``'s file)."""
 
     def num(value: float | None, fmt: str) -> str:
         return "n/a" if value is None else format(value, fmt)
 
     laps = ", ".join(f"{t:.2f} s" for t in result.lap_times_s) or "none"
-    written = [str(out / "result.json"), str(out / "run.png"), *([] if bag is None else [bag])]
+    written = [str(out / "result.json"), str(out / "run.png")]
+    written += [str(extra) for extra in (bag, saved_map) if extra is not None]
     ratio = result.lap_time_ratio
     best = "n/a" if ratio is None or not math.isfinite(ratio) else f"{ratio:.2f}x"
     rows = [] if scenario is None else [("scenario", scenario)]

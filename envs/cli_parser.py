@@ -147,7 +147,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--save-map",
         metavar="FILE",
         help="with --localization slam: write the map after the first lap as a conesim "
-        "track file (.yaml) that --track can load",
+        "track file (.yaml) that --track can load (not on the skidpad)",
     )
 
     _sweep_options(

@@ -487,6 +487,8 @@ def test_results_table_text() -> None:
     table = format_result(make_result([17.03]), Path("out"))
     assert "1/1: 17.03 s\n" in table
     assert "(best lap 1.14x)" in table
+    table = format_result(make_result([]), Path("out"), "bag", saved_map=Path("map.yaml"))
+    assert table.endswith("written            out/result.json, out/run.png, bag, map.yaml")
 
 
 def test_a_reader_that_goes_away_ends_the_command_quietly(

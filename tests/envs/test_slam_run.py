@@ -59,6 +59,27 @@ def test_save_map_needs_slam(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.parametrize(
+    ("track", "target", "message"),
+    [
+        ("skidpad", "m.yaml", "--save-map: a skidpad's map after its first lap holds one"),
+        ("autocross", "afile/m.yaml", "afile is not a directory"),
+        ("autocross", "m.csv", "a conesim track file ends in .yaml"),
+    ],
+)
+def test_save_map_refusals_come_before_the_run(
+    track: str, target: str, message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A skidpad (its first lap maps one circle), a file as the map's folder, a
+    suffix no track file has: one line, exit 2, nothing run or written."""
+    (tmp_path / "afile").write_text("")
+    args = ["run", "--track", track, "--localization", "slam", "--out", str(tmp_path / "o")]
+    code = main([*args, "--save-map", str(tmp_path / target)])
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "o").exists() and not (tmp_path / target).exists()
+
+
 def test_one_slam_lap_reports_its_map_and_saves_a_loadable_track(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
