@@ -27,9 +27,10 @@ Subcommands:
 Exit codes: 0 success (``run``: every lap completed), 1 a check found errors
 or a run did not finish (off track, stuck, time limit), 2 bad input (one line
 on stderr per problem, naming the file or option and what is wrong; never a
-traceback; nothing written; argparse's errors too), 141 the reader of stdout
-went away (a pipe into ``head``), quietly, as a shell reports a command
-ended by SIGPIPE.
+traceback; nothing written; argparse's errors too), 130 interrupted (Ctrl-C:
+one line; ``run`` writes nothing, ``sweep`` keeps the runs finished), 141
+the reader of stdout went away (a pipe into ``head``), quietly, as a shell
+reports a command ended by SIGPIPE.
 """
 
 from __future__ import annotations
@@ -85,6 +86,7 @@ EXIT_OK = 0
 EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE: what a shell reports for a reader that went away
+EXIT_INTERRUPTED = 130  # 128 + SIGINT: Ctrl-C
 
 INPUT_ERRORS = (TrackFormatError, GlobalPathError, GeodesyError, FileNotFoundError, FieldError)
 __all__ = ["EXIT_BAD_INPUT", "CliError", "build_parser", "main"]
@@ -527,6 +529,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         for line in str(exc).splitlines() or [""]:
             print(f"conesim: error: {line}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        # Ctrl-C: one line, not a traceback. ``run`` writes its outputs only at
+        # the end (a bag's temporary directory is removed on the way out);
+        # ``sweep`` catches it itself and says what it kept.
+        print("conesim: interrupted; nothing written", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except BrokenPipeError:
         # The reader went away (`conesim tracks | head -1`): stop quietly, as
         # a command in a pipeline should. What is left for stdout, Python's

@@ -17,6 +17,7 @@ from matplotlib.figure import Figure
 from conesim.core.geodesy import GeodesyError
 from conesim.envs import cli, runner, scenario
 from conesim.envs.cli import build_parser, format_result, main
+from conesim.envs.loop import ClosedLoop
 from conesim.envs.runner import RunResult
 from conesim.tracks import Track, load_track
 from conesim.tracks.global_path import GlobalPath
@@ -515,6 +516,27 @@ def test_a_reader_that_goes_away_ends_the_command_quietly(
         monkeypatch.setattr("sys.stdout", ClosedPipe(stand_in.fileno()))
         assert main(["tracks"]) == cli.EXIT_BROKEN_PIPE == 141
     assert capsys.readouterr().err == ""
+
+
+def test_ctrl_c_during_a_run_is_one_line_130_and_writes_nothing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Ctrl-C at the 50th step of a run with a bag: exit 130 (128 + SIGINT), one
+    line, no --out directory and nothing left of the bag (its temporary one included)."""
+    step = ClosedLoop.step
+    calls = []
+
+    def interrupted(self: ClosedLoop) -> object:
+        calls.append(1)
+        if len(calls) == 50:
+            raise KeyboardInterrupt
+        return step(self)
+
+    monkeypatch.setattr(ClosedLoop, "step", interrupted)
+    args = ["run", "--track", "skidpad", "--out", str(tmp_path / "o"), "--bag", str(tmp_path / "b")]
+    assert main(args) == cli.EXIT_INTERRUPTED == 130
+    assert capsys.readouterr().err == "conesim: interrupted; nothing written\n"
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_commands_other_than_run_load_no_compiled_kernels() -> None:
