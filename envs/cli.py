@@ -213,7 +213,6 @@ def cmd_track_generate(args: argparse.Namespace) -> int:
     return EXIT_FAILED if report["errors"] else EXIT_OK
 
 
-MAX_LAPS = 100
 FLAGS = {
     "track": "track",
     "laps": "laps",
@@ -250,11 +249,12 @@ def _scenario(args: argparse.Namespace) -> Scenario:
 
     The flags' own ranges are checked first, so that their errors name them.
     """
+    from conesim.envs.scenario import MAX_LAPS, SEED_LIMIT  # noqa: PLC0415 (with the loop)
     from conesim.envs.scenario_file import load_scenario  # noqa: PLC0415 (with the loop)
 
     if args.laps is not None and not 1 <= args.laps <= MAX_LAPS:
         raise CliError(f"--laps {args.laps}: must be in [1, {MAX_LAPS}]")
-    if args.seed is not None and not 0 <= args.seed < 2**63:
+    if args.seed is not None and not 0 <= args.seed < SEED_LIMIT:
         raise CliError(f"--seed {args.seed}: must be a non-negative integer below 2**63")
     if args.track is not None and not args.track.strip():
         raise CliError("--track: empty track name; give a shipped track name or a track file")

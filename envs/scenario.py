@@ -56,6 +56,10 @@ AutopilotPreset = Literal["auto", "default", "cautious"]
 """The autopilot settings a scenario's start from: ``auto`` follows the localization."""
 
 SEED_LIMIT = 2**63  # a seed is a non-negative integer below this
+MAX_LAPS = 100  # [-] at a minute a lap, over an hour and a half of simulated driving
+RATE_LIMITS = {"control_rate": (1.0, 1000.0), "physics_rate": (1.0, 10_000.0)}  # [Hz]
+"""The loop's and the physics' rates allowed: below 1 Hz a step outlasts a corner;
+above 10 kHz a lap costs hours of wall time and pymunk gains nothing."""
 
 
 @dataclass(frozen=True)
@@ -65,12 +69,13 @@ class Scenario:
     Attributes:
         track: a shipped track's name, a track file, or a generated track
             (``GeneratedTrack(seed, TrackSpec(...))``).
-        laps: laps to drive, >= 1 [-] (an open lane is one run).
+        laps: laps to drive, 1 to ``MAX_LAPS`` [-] (an open lane is one run).
         seed: the episode seed, as ``conesim run --seed`` and ``env.reset(seed=)``.
         time_limit: truncation time [s]; None: 60 s per lap plus 30 s.
         end_on_off_track: the run ends when the car leaves the track.
         end_on_stuck: the run ends when race control finds the car stuck.
-        control_rate: the loop's clock: the autopilot's (or action's) rate [Hz].
+        control_rate: the loop's clock: the autopilot's (or action's) rate [Hz]
+            (``RATE_LIMITS``).
         physics_rate: physics steps per second [Hz], a multiple of control_rate.
         localization: ``fused`` (EKF), ``raw`` (the ROS pipeline's), ``truth``,
             ``cones`` (the EKF with the cone scans against the cone map), or
@@ -118,18 +123,24 @@ class Scenario:
                     "(or a GeneratedTrack)"
                 )
             object.__setattr__(self, "track", os.fspath(track))
-        if isinstance(self.laps, bool) or not (isinstance(self.laps, int) and self.laps >= 1):
-            raise ValueError(f"Scenario.laps = {self.laps!r} is out of range: allowed >= 1")
+        if isinstance(self.laps, bool) or not (
+            isinstance(self.laps, int) and 1 <= self.laps <= MAX_LAPS
+        ):
+            raise ValueError(
+                f"Scenario.laps = {self.laps!r} is out of range: allowed [1, {MAX_LAPS}]"
+            )
         if isinstance(self.seed, bool) or not (
             isinstance(self.seed, int) and 0 <= self.seed < SEED_LIMIT
         ):
             raise ValueError(
                 f"Scenario.seed = {self.seed!r} is out of range: allowed [0, 2**63) (an integer)"
             )
-        for name in ("control_rate", "physics_rate"):
+        for name, (low, high) in RATE_LIMITS.items():
             rate = getattr(self, name)
-            if not (math.isfinite(rate) and rate > 0.0):
-                raise ValueError(f"Scenario.{name} = {rate!r} is out of range: allowed > 0 [Hz]")
+            if not (math.isfinite(rate) and low <= rate <= high):
+                raise ValueError(
+                    f"Scenario.{name} = {rate!r} is out of range: allowed [{low:g}, {high:g}] [Hz]"
+                )
             # plain floats: an int or numpy rate would give the clock another type
             object.__setattr__(self, name, float(rate))
         ratio = self.physics_rate / self.control_rate
@@ -152,6 +163,10 @@ class Scenario:
         if self.time_limit is not None:
             object.__setattr__(self, "time_limit", float(self.time_limit))
         self.rules  # noqa: B018 (EpisodeRules checks the time limit)
+        try:  # each part is valid alone; together they must be too
+            apply_faults(self.sensors, self.faults)
+        except ValueError as exc:
+            raise ValueError(f"Scenario: the sensors with their faults: {exc}") from None
 
     def _check_types(self) -> None:
         """Each part is its package's config (a mapping belongs in ``scenario_file``)."""

@@ -56,11 +56,15 @@ from conesim.sim.sensors.streams import stream
 from conesim.sim.sensors.timing import SensorTiming
 from conesim.sim.sensors.truth import TruthSample
 from conesim.sim.sensors.validation import (
+    check_closed,
     check_interval,
     check_non_negative,
     check_positive,
     check_probability,
 )
+
+MAX_FALSE_POSITIVES = 100.0  # [1/scan] a bound on the ghost cones a scan may hold (a
+# real LiDAR pipeline reports tens of cones; 1e9 would take 15 GB per scan)
 
 # Colour class of each entry of CONE_COLOURS (big_orange -> the orange row).
 _CODE_TO_CLASS = np.array([KIND_TO_CLASS[k] for k in CONE_COLOURS], dtype=np.intp)
@@ -84,7 +88,8 @@ class ConeDetectorConfig(SensorTiming):
         bearing_sigma: white bearing noise std [rad].
         detection_probability_at_zero: p0 of p(r) = clip(p0 - k r, 0, 1).
         detection_probability_slope: k of the same law [1/m], >= 0.
-        false_positive_rate: mean false positives per scan (Poisson) [1/scan].
+        false_positive_rate: mean false positives per scan (Poisson), at most
+            ``MAX_FALSE_POSITIVES`` [1/scan].
         report_colour: attach colour labels (False: a colour-blind detector).
         colour_range: colour recognised only up to this range [m] (inf allowed).
         colour_probability: chance a cone in colour range is recognised.
@@ -130,7 +135,10 @@ class ConeDetectorConfig(SensorTiming):
         check_non_negative(
             owner, "detection_probability_slope", self.detection_probability_slope, "[1/m]"
         )
-        check_non_negative(owner, "false_positive_rate", self.false_positive_rate, "[1/scan]")
+        check_closed(
+            owner, "false_positive_rate", self.false_positive_rate,
+            low=0.0, high=MAX_FALSE_POSITIVES, unit="[1/scan]",
+        )  # fmt: skip
         if not self.colour_range >= 0.0:
             raise ValueError(
                 f"{owner}.colour_range = {self.colour_range!r} is out of range: "

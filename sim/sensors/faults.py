@@ -40,12 +40,13 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Protocol, TypeVar
 
-from conesim.sim.sensors.cone_detector import ConeDetectorConfig
+from conesim.sim.sensors.cone_detector import MAX_FALSE_POSITIVES, ConeDetectorConfig
 from conesim.sim.sensors.gps import GpsConfig
 from conesim.sim.sensors.heading import HeadingConfig
 from conesim.sim.sensors.imu import ImuConfig
 from conesim.sim.sensors.profiles import SECTIONS, SensorProfile
 from conesim.sim.sensors.validation import (
+    check_closed,
     check_finite,
     check_non_negative,
     check_pair,
@@ -98,7 +99,8 @@ class ConeFaults:
     Attributes:
         detection_probability: each cone the detector would report is
             reported with this probability (misses: 1 - q) [-].
-        false_positives_per_scan: mean ghost cones added to every scan [1/scan].
+        false_positives_per_scan: mean ghost cones added to every scan, at most
+            ``MAX_FALSE_POSITIVES`` [1/scan].
         colour_swap_probability: chance that a blue label is reported yellow,
             and a yellow one blue [-].
         noise_scale: range and bearing noise times this [-].
@@ -114,9 +116,10 @@ class ConeFaults:
     def __post_init__(self) -> None:
         owner = "ConeFaults"
         check_probability(owner, "detection_probability", self.detection_probability)
-        check_non_negative(
-            owner, "false_positives_per_scan", self.false_positives_per_scan, "[1/scan]"
-        )
+        check_closed(
+            owner, "false_positives_per_scan", self.false_positives_per_scan,
+            low=0.0, high=MAX_FALSE_POSITIVES, unit="[1/scan]",
+        )  # fmt: skip
         check_probability(owner, "colour_swap_probability", self.colour_swap_probability)
         check_non_negative(owner, "noise_scale", self.noise_scale, "[-]")
         check_non_negative(owner, "extra_latency", self.extra_latency, "[s]")

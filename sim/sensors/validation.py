@@ -46,6 +46,14 @@ def check_interval(
         raise _fail(owner, field, value, f"({low:g}, {high:g}] {unit}".rstrip())
 
 
+def check_closed(
+    owner: str, field: str, value: float, *, low: float, high: float, unit: str = ""
+) -> None:
+    """Require low <= value <= high."""
+    if not (math.isfinite(value) and low <= value <= high):
+        raise _fail(owner, field, value, f"[{low:g}, {high:g}] {unit}".rstrip())
+
+
 def check_choice(owner: str, field: str, value: str, allowed: tuple[str, ...]) -> None:
     """Require one of the listed names."""
     if value not in allowed:

@@ -80,10 +80,18 @@ def test_an_overridden_receiver_gets_a_filter_that_models_it() -> None:
 @pytest.mark.parametrize(
     ("changes", "message"),
     [
-        ({"laps": 0}, "Scenario.laps = 0 is out of range: allowed >= 1"),
+        ({"laps": 0}, "Scenario.laps = 0 is out of range: allowed [1, 100]"),
+        ({"laps": 101}, "Scenario.laps = 101 is out of range: allowed [1, 100]"),
         ({"seed": -1}, "Scenario.seed = -1 is out of range: allowed [0, 2**63)"),
         ({"seed": 2**63}, "allowed [0, 2**63)"),
-        ({"control_rate": 0.0}, "Scenario.control_rate = 0.0 is out of range: allowed > 0 [Hz]"),
+        ({"control_rate": 0.0}, "Scenario.control_rate = 0.0 is out of range: allowed [1, 1000]"),
+        ({"control_rate": 1e-3, "physics_rate": 1e-3}, "control_rate = 0.001 is out of range"),
+        ({"physics_rate": 1e7}, "Scenario.physics_rate = 10000000.0 is out of range: allowed"),
+        (
+            {"faults": Faults(cones=ConeFaults(false_positives_per_scan=100.0))},
+            "Scenario: the sensors with their faults: ConeDetectorConfig.false_positive_rate "
+            "= 100.1 is out of range: allowed [0, 100] [1/scan]",
+        ),
         ({"control_rate": 30.0}, "physics_rate (200.0 Hz) must be a whole multiple"),
         (
             {"localization": "gps"},

@@ -181,7 +181,7 @@ BAD = [
     ("autopilot:\n  speed_profile:\n    vmax: 10\n",
      "s.yaml:3: autopilot.speed_profile.vmax: unknown key 'vmax'; allowed keys: a_lat_max,"),
     # out of range: the configs' own messages, at the field
-    ("laps: 0\n", "s.yaml:1: laps: Scenario.laps = 0 is out of range: allowed >= 1"),
+    ("laps: 0\n", "s.yaml:1: laps: Scenario.laps = 0 is out of range: allowed [1, 100]"),
     ("sensors:\n  cones:\n    max_range: -1\n",
      "s.yaml:3: sensors.cones.max_range: ConeDetectorConfig.max_range = -1.0 is out of range: "
      "allowed (0, inf) [m]"),

@@ -304,7 +304,8 @@ def test_detection_probability_scales_the_range_law() -> None:
     ("make", "message"),
     [
         (lambda: ConeFaults(detection_probability=1.2), "ConeFaults.detection_probability"),
-        (lambda: ConeFaults(false_positives_per_scan=-1.0), "[0, inf) [1/scan]"),
+        (lambda: ConeFaults(false_positives_per_scan=-1.0), "[0, 100] [1/scan]"),
+        (lambda: ConeFaults(false_positives_per_scan=1e9), "[0, 100] [1/scan]"),
         (lambda: ConeFaults(noise_scale=math.nan), "ConeFaults.noise_scale"),
         (lambda: GpsFaults(dropouts=((12.0, 10.0),)), "GpsFaults.dropouts[0]"),
         (lambda: GpsFaults(dropouts=((-1.0, 1.0),)), "0 <= start < end"),

@@ -59,7 +59,8 @@ BAD_CONFIGS: list[tuple[type, dict[str, Any], str, str]] = [
         "[0, 1]",
     ),
     (ConeDetectorConfig, {"colour_probability": -0.1}, "colour_probability", "[0, 1]"),
-    (ConeDetectorConfig, {"false_positive_rate": -1.0}, "false_positive_rate", "[0, inf)"),
+    (ConeDetectorConfig, {"false_positive_rate": -1.0}, "false_positive_rate", "[0, 100]"),
+    (ConeDetectorConfig, {"false_positive_rate": 101.0}, "false_positive_rate", "[0, 100]"),
     (
         ConeDetectorConfig,
         {"confusion": ((0.9, 0.0, 0.0, 0.0),) + ((1.0, 0.0, 0.0, 0.0),) * 3},
