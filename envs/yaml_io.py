@@ -25,6 +25,8 @@ from conesim.envs.dataclass_io import FieldError, Path
 MAX_BYTES = 1 << 20  # [B] a scenario is a page or two; anything larger is not one
 
 Lines = dict[Path, int]
+MAX_VALUES = 100_000  # [-] values in a document with its aliases expanded (a sweep of
+# hundreds of points holds a few thousand; nested aliases can make 10^7 of 7 lines)
 """Key path -> the 1-based line of the key."""
 
 
@@ -77,8 +79,24 @@ def parse_yaml(text: str, source: str) -> tuple[Any, Lines]:
         raise FieldError((), "not valid YAML: nested too deeply", source) from None
     lines: Lines = {}
     if node is not None:
+        _check_size(node, source)
         _lines(node, (), lines, source)
     return data, lines
+
+
+def _check_size(root: yaml.Node, source: str) -> None:
+    """Refuse a document of more than ``MAX_VALUES`` values, aliases expanded (what
+    the line map and the checks would walk; a recursive alias never ends)."""
+    stack, count = [root], 0
+    while stack:
+        node = stack.pop()
+        count += 1
+        if count > MAX_VALUES:
+            raise FieldError((), f"more than {MAX_VALUES} values with its aliases expanded", source)
+        if isinstance(node, yaml.SequenceNode):
+            stack.extend(node.value)
+        elif isinstance(node, yaml.MappingNode):
+            stack.extend(v for pair in node.value for v in pair)
 
 
 def read_yaml(path: str | os.PathLike[str]) -> tuple[Any, Lines]:

@@ -8,7 +8,14 @@ from pathlib import Path
 import pytest
 
 from conesim.envs.dataclass_io import FieldError
-from conesim.envs.yaml_io import MAX_BYTES, dump_yaml, parse_value, parse_yaml, read_yaml
+from conesim.envs.yaml_io import (
+    MAX_BYTES,
+    MAX_VALUES,
+    dump_yaml,
+    parse_value,
+    parse_yaml,
+    read_yaml,
+)
 
 TEXT = """\
 track: autocross
@@ -37,6 +44,24 @@ def test_a_duplicate_key_is_refused_with_its_line() -> None:
     with pytest.raises(FieldError) as info:
         parse_yaml("laps: 1\nseed: 2\nlaps: 3\n", "s.yaml")
     assert str(info.value) == "s.yaml:3: laps: duplicate key"
+
+
+def test_nested_aliases_past_the_value_limit_are_refused() -> None:
+    """Seven lines of aliases ten deep expand to 10^7 values: refused by name, at
+    once; five levels (1.1e5 values with the lists) too, four (1.1e4) read."""
+
+    def nested(levels: int) -> str:
+        lines = ["a0: &a0 [x, x, x, x, x, x, x, x, x, x]"]
+        lines += [f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 10)}]" for i in range(1, levels)]
+        return "\n".join(lines) + "\n"
+
+    for levels in (7, 5):
+        with pytest.raises(FieldError, match=f"more than {MAX_VALUES} values with its aliases"):
+            parse_yaml(nested(levels), "b.yaml")
+    data, _ = parse_yaml(nested(4), "b.yaml")
+    assert len(data["a3"]) == 10 and data["a3"][0][0][0] == ["x"] * 10
+    with pytest.raises(FieldError, match="aliases expanded"):  # an alias in itself
+        parse_yaml("a: &a [*a]\n", "r.yaml")
 
 
 def test_invalid_yaml_names_the_line() -> None:
