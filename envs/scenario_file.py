@@ -135,6 +135,10 @@ def _expand(data: dict[str, Any], key: str) -> None:
 def apply_override(data: dict[str, Any], override: Override) -> None:
     """Set ``override.key`` in ``data`` (in place), making mappings on the way.
 
+    ``track.generate.*`` over a track given by name or file replaces it: the
+    run drives the generated track (``--set track.generate.seed=3`` on a
+    scenario of ``autocross``, or a sweep's generated tracks over it).
+
     Raises:
         FieldError: an empty key, or a key under a value that is not a mapping.
     """
@@ -142,6 +146,8 @@ def apply_override(data: dict[str, Any], override: Override) -> None:
     if not all(parts):
         raise FieldError((), f"bad key {override.key!r}: expected names joined by dots")
     node = data
+    if parts[:2] == ["track", "generate"] and isinstance(data.get("track"), str):
+        data["track"] = {}  # a track named or in a file gives way to a generated one
     for depth, part in enumerate(parts[:-1]):
         if depth == 0:
             _expand(node, part)

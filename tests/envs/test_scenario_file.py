@@ -25,7 +25,7 @@ from conesim.localization.ekf import EkfConfig
 from conesim.planner import AutopilotConfig
 from conesim.sim.sensors import ConeFaults, Faults, GpsFaults, get_profile, override
 from conesim.sim.vehicle_params import VehicleParams
-from conesim.tracks import load_track
+from conesim.tracks import GeneratedTrack, load_track
 from conesim.tracks.survey import ConeSurvey, PathSurvey
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "scenarios" / "example.yaml"
@@ -114,6 +114,18 @@ def test_overrides_are_edits_of_the_file(tmp_path: Path) -> None:
     assert s.laps == 3 and s.faults.cones.detection_probability == 0.7
     s = load_scenario(path, [Override("seed", 1), Override("seed", 2)])
     assert s.seed == 2
+
+
+def test_a_generated_track_over_a_named_one_replaces_it(tmp_path: Path) -> None:
+    """``track.generate.seed`` over ``track: autocross``: the generated track, its
+    other keys at their defaults; over a generated track, one key changes."""
+    named = load_scenario(write(tmp_path, "track: autocross\n"), {"track.generate.seed": 3})
+    generated = load_scenario(None, {"track": {"generate": {"seed": 3}}})
+    assert named.track == generated.track and isinstance(named.track, GeneratedTrack)
+    assert named.track.seed == 3
+    path = write(tmp_path, "track: {generate: {seed: 1, size: large}}\n")
+    changed = load_scenario(path, {"track.generate.seed": 4}).track
+    assert isinstance(changed, GeneratedTrack) and (changed.seed, changed.spec.size) == (4, "large")
 
 
 def test_a_track_file_is_relative_to_the_scenario(tmp_path: Path, monkeypatch: Any) -> None:
