@@ -236,7 +236,9 @@ class EnvConfig:
         if self.time_limit is not None and not (
             _is_real(self.time_limit) and math.isfinite(self.time_limit) and self.time_limit > 0
         ):
-            raise ValueError(f"EnvConfig.time_limit must be > 0 [s], got {self.time_limit!r}")
+            raise ValueError(
+                f"EnvConfig.time_limit must be finite and > 0 [s], got {self.time_limit!r}"
+            )
         # Plain Python values from here: a numpy float32 rate would make the
         # simulation clock float32 and the same seed give another run.
         track = self.track

@@ -120,7 +120,7 @@ class EpisodeRules:
             raise ValueError(f"EpisodeRules.laps must be an integer >= 1, got {self.laps!r}")
         limit = self.time_limit
         if limit is not None and not (math.isfinite(limit) and limit > 0.0):
-            raise ValueError(f"EpisodeRules.time_limit must be > 0 [s], got {limit!r}")
+            raise ValueError(f"EpisodeRules.time_limit must be finite and > 0 [s], got {limit!r}")
         for name, low, closed in (
             ("stuck_time", 0.0, False),
             ("stuck_progress", 0.0, True),

@@ -119,11 +119,15 @@ class _Places:
         self.places[path] = label
 
     def of(self, path: Path) -> str | None:
-        """The place of the longest prefix of ``path`` that has one, else the file."""
-        for n in range(len(path), -1, -1):
+        """The place of the longest prefix of ``path`` that has one, else of a key
+        under it (``--set laps.x=1`` made ``laps`` a mapping), else the file."""
+        for n in range(len(path), 0, -1):
             if path[:n] in self.places:
                 return self.places[path[:n]]
-        return self.source
+        below = [place for p, place in self.places.items() if path and p[: len(path)] == path]
+        if below:
+            return below[-1]
+        return self.places.get((), self.source)
 
 
 def _expand(data: dict[str, Any], key: str) -> None:

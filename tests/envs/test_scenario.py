@@ -98,7 +98,7 @@ def test_an_overridden_receiver_gets_a_filter_that_models_it() -> None:
             "Scenario.localization = 'gps': allowed fused, raw, truth, cones",
         ),
         ({"ekf_tuning": "fast"}, "Scenario.ekf_tuning = 'fast': allowed auto, ideal, rtk,"),
-        ({"time_limit": -1.0}, "EpisodeRules.time_limit must be > 0 [s]"),
+        ({"time_limit": -1.0}, "EpisodeRules.time_limit must be finite and > 0 [s]"),
         ({"track": " "}, "Scenario.track = ' ': give a shipped track name or a file"),
     ],
 )

@@ -213,7 +213,8 @@ BAD = [
      "of range"),
     ("control_rate: 30\n", "s.yaml:1: control_rate: Scenario: physics_rate (200.0 Hz) must be "
      "a whole multiple of control_rate (30.0 Hz)"),
-    ("time_limit: -5\n", "s.yaml:1: time_limit: EpisodeRules.time_limit must be > 0 [s]"),
+    ("time_limit: -5\n",
+     "s.yaml:1: time_limit: EpisodeRules.time_limit must be finite and > 0 [s]"),
     # wrong types: the expected type
     ("laps: two\n", "s.yaml:1: laps: expected an integer, got 'two' (text)"),
     ("laps: 1.5\n", "s.yaml:1: laps: expected an integer, got 1.5 (a number)"),
@@ -284,6 +285,14 @@ def test_an_override_error_names_the_override(
     with pytest.raises(FieldError) as info:
         load_scenario(path, [override])
     assert str(info.value).startswith(message), str(info.value)
+
+
+def test_a_key_made_a_mapping_by_an_override_is_blamed_on_it() -> None:
+    """``--set seed.x=1`` with no seed given makes ``seed`` a mapping; the error
+    names the override, not a file or nothing."""
+    with pytest.raises(FieldError) as info:
+        load_scenario(None, [Override("seed.x", 1, "--set seed.x=1")])
+    assert str(info.value).startswith("--set seed.x=1: seed: expected an integer, got {'x': 1}")
 
 
 def test_the_readmes_example_loads() -> None:
