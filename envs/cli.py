@@ -186,6 +186,8 @@ def cmd_track_generate(args: argparse.Namespace) -> int:
     target = Path(out)
     if target.is_dir():
         raise CliError(f"--out {out}: is a directory; give a .yaml file name")
+    if target.suffix not in (".yaml", ".yml"):
+        raise CliError(f"--out {out}: a conesim track file ends in .yaml")
     if not 0 <= args.seed < 2**63:
         raise CliError(f"--seed {args.seed}: must be a non-negative integer below 2**63")
     given = {field: getattr(args, flag) for flag, field in GENERATE_FLAGS.items()}

@@ -346,7 +346,7 @@ def _seed_range(value: Any) -> range:
         raise ValueError(
             f"EnvConfig.track_seeds must be a range or a pair (lo, hi) of integers, got {value!r}"
         )
-    if len(seeds) == 0 or min(seeds[0], seeds[-1]) < 0 or max(seeds[0], seeds[-1]) >= 2**63:
+    if not seeds or min(seeds[0], seeds[-1]) < 0 or max(seeds[0], seeds[-1]) >= 2**63:
         raise ValueError(
             f"EnvConfig.track_seeds = {value!r} is out of range: allowed a non-empty range "
             "of seeds in [0, 2**63)"

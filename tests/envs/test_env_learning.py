@@ -229,6 +229,6 @@ def test_random_tracks_are_drawn_per_episode_from_the_seed_range() -> None:
     check_env(
         ConeTrackEnv(track="random", track_seeds=(5, 8), time_limit=1.0), skip_render_check=True
     )
-    for bad in ((5, 5), (1.5, 3.0), "0-1000", range(-1, 3)):
+    for bad in ((5, 5), (1.5, 3.0), "0-1000", range(-1, 3), (0, 2**70)):
         with pytest.raises(ValueError, match=r"EnvConfig\.track_seeds"):
             ConeTrackEnv(track="random", track_seeds=bad)

@@ -73,6 +73,13 @@ def test_generate_bad_input_is_one_line_exit_2(
     assert not file.exists()
 
 
+def test_generate_wants_a_yaml_name(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``--out g.csv``: the conesim format is YAML, so the name is refused (exit 2)."""
+    file = tmp_path / "g.csv"
+    code, _, err = run_cli(["track", "generate", "--seed", "1", "--out", str(file)], capsys)
+    assert code == 2 and "a conesim track file ends in .yaml" in err and not file.exists()
+
+
 def test_scenario_file_generates_its_track(tmp_path: Path) -> None:
     """`track: {generate: {seed, size, ...}}` in a scenario file is a GeneratedTrack;
     `scenario show` writes every setting out and reads back the same scenario."""
