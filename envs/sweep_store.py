@@ -112,9 +112,12 @@ def check_sweep_dir(out: Path, sweep: Sweep) -> None:
         if base == out and any(out.iterdir()):
             made = read_manifest(out)
             if made is None:
-                raise SweepDirError(
-                    f"{out}: holds other files and no sweep.json; give a new or empty directory"
+                what = (
+                    "a sweep.json conesim cannot read (damaged, or not its own)"
+                    if (out / MANIFEST).exists()
+                    else "other files and no sweep.json"
                 )
+                raise SweepDirError(f"{out}: holds {what}; give a new or empty directory")
             if made.get("fingerprint") != sweep.fingerprint:
                 raise SweepDirError(
                     f"{out}: holds a sweep of other runs (from {made.get('source')}); "

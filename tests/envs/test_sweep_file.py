@@ -110,8 +110,8 @@ BAD = [
      r"allowed keys: conesim_sweep, base, axes, points"),
     ("conesim_sweep: 2\naxes: {seed: [1]}\n", r"sweep.yaml:1: conesim_sweep: unknown format "
      r"version 2"),
-    ("base: {}\n", r"give either axes \(their product\) or points \(a list\), not both"),
-    ("axes: {seed: [1]}\npoints: [{seed: 1}]\n", r"give either axes"),
+    ("base: {}\n", r"give either axes \(their product\) or points \(a list\); it has neither"),
+    ("axes: {seed: [1]}\npoints: [{seed: 1}]\n", r"give either axes .*; it has both"),
     ("axes: {}\n", r"sweep.yaml:1: axes: expected a mapping of dotted keys"),
     ("axes: {seed: 3}\n", r"sweep.yaml:1: axes.seed: expected a list of values"),
     ("axes: {seed: []}\n", r"axes.seed: has no values"),
@@ -167,6 +167,8 @@ def test_bad_command_line_is_one_line_exit_2(
     (other / "sweep.json").write_text(json.dumps({"conesim_sweep_dir": 1, "fingerprint": "x"}))
     (tmp_path / "notes").mkdir()
     (tmp_path / "notes" / "todo.txt").write_text("mine")
+    (tmp_path / "broken").mkdir()
+    (tmp_path / "broken" / "sweep.json").write_text('{"conesim_sweep_dir": 1, "finger')
     cases = [
         (["--out", str(tmp_path / "o"), "--workers", "0"], r"--workers 0: must be in \[1, 1024\]"),
         ([], r"--out DIR is required"),
@@ -174,6 +176,7 @@ def test_bad_command_line_is_one_line_exit_2(
         (["--out", str(tmp_path / "file")], r"is not a directory"),
         (["--out", str(other)], r"holds a sweep of other runs"),
         (["--out", str(tmp_path / "notes")], r"holds other files and no sweep.json"),
+        (["--out", str(tmp_path / "broken")], r"holds a sweep.json conesim cannot read"),
         (["--out", str(tmp_path / "o"), "--workers", "x"], r"invalid int value: 'x'"),
         (["--out", str(tmp_path / "o"), "--ray", ""], r"--ray: empty address"),
     ]
