@@ -260,6 +260,8 @@ def _scenario(args: argparse.Namespace) -> Scenario:
         raise CliError(f"--seed {args.seed}: must be a non-negative integer below 2**63")
     if args.track is not None and not args.track.strip():
         raise CliError("--track: empty track name; give a shipped track name or a track file")
+    if args.scenario is not None and not args.scenario.strip():
+        raise CliError("empty scenario file name; give a .yaml file, or none for the defaults")
     return load_scenario(args.scenario, _overrides(args))
 
 
@@ -294,6 +296,8 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     if not args.out.strip():
         raise CliError("--out: empty directory name; give the output directory")
+    if args.bag is not None and not args.bag.strip():
+        raise CliError("--bag: empty directory name; give the bag's directory")
     scenario = _scenario(args)
     track = _load_track(scenario.track, "--track" if args.track is not None else "track")
     global_path = global_path_for_track(track)
@@ -443,8 +447,8 @@ def format_result(
     """The results table ``conesim run`` prints (``bag``: the bag written, if any;
     ``scenario``: the scenario file run, if any; ``saved_map``: ``--save-map``'s file)."""
 
-    def num(value: float | None, fmt: str) -> str:
-        return "n/a" if value is None else format(value, fmt)
+    def num(value: float | None, fmt: str, unit: str) -> str:
+        return "n/a" if value is None else f"{format(value, fmt)} {unit}"
 
     laps = ", ".join(f"{t:.2f} s" for t in result.lap_times_s) or "none"
     written = [str(out / "result.json"), str(out / "run.png")]
@@ -469,10 +473,10 @@ def format_result(
         ("off-track events", str(result.off_track_events)),
         (
             "localization RMSE",
-            f"{num(result.localization_pos_rmse_m, '.3f')} m, "
-            f"{num(result.localization_yaw_rmse_deg, '.3f')} deg",
+            f"{num(result.localization_pos_rmse_m, '.3f', 'm')}, "
+            f"{num(result.localization_yaw_rmse_deg, '.3f', 'deg')}",
         ),
-        ("midline RMSE", f"{num(result.midline_rmse_m, '.3f')} m"),
+        ("midline RMSE", num(result.midline_rmse_m, ".3f", "m")),
         ("planner fallbacks", str(result.planner_fallbacks)),
         *_map_rows(result),
         (

@@ -33,6 +33,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         return cmd_sweep_summary(args)
     if args.dir is not None:
         raise CliError(f"sweep: unexpected argument {args.dir!r} (the output goes to --out DIR)")
+    if not args.sweep.strip():
+        raise CliError("sweep: empty sweep file name; give the sweep's .yaml file")
     if args.out is None or not args.out.strip():
         raise CliError("sweep: --out DIR is required: the directory for the sweep's outputs")
     if args.workers is not None and not 1 <= args.workers <= MAX_WORKERS:

@@ -485,6 +485,7 @@ def test_results_table_text() -> None:
     table = format_result(make_result([]), Path("out"))
     assert "laps               0/1: none\n" in table
     assert "limit lap          14.94 s (best lap n/a); centreline 16.50 s\n" in table
+    assert "localization RMSE  n/a, n/a\n" in table and "midline RMSE       n/a\n" in table
     table = format_result(make_result([17.03]), Path("out"))
     assert "1/1: 17.03 s\n" in table
     assert "(best lap 1.14x)" in table
@@ -516,6 +517,30 @@ def test_a_reader_that_goes_away_ends_the_command_quietly(
         monkeypatch.setattr("sys.stdout", ClosedPipe(stand_in.fileno()))
         assert main(["tracks"]) == cli.EXIT_BROKEN_PIPE == 141
     assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["run", "", "--out", "o"], "empty scenario file name"),
+        (["scenario", "show", ""], "empty scenario file name"),
+        (["run", "--bag", "", "--out", "o"], "--bag: empty directory name"),
+        (["sweep", "", "--out", "o"], "sweep: empty sweep file name"),
+    ],
+)
+def test_an_empty_name_is_named_as_empty(
+    args: list[str],
+    message: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """An empty file or directory name: one line saying so (not 'is a directory'), exit 2."""
+    monkeypatch.chdir(tmp_path)
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"conesim: error: {message}") and err.count("\n") == 1, err
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_ctrl_c_during_a_run_is_one_line_130_and_writes_nothing(
