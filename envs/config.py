@@ -25,9 +25,10 @@ from typing import Any, Literal, get_args
 import numpy as np
 
 from conesim.envs.dataclass_io import build
+from conesim.envs.ekf_tuning import tuning_name
 from conesim.envs.loop import EpisodeRules
 from conesim.envs.scenario import EkfTuning, Localization, Scenario
-from conesim.envs.scenario_file import load_scenario, track_from_data
+from conesim.envs.scenario_file import ekf_from_data, load_scenario, track_from_data
 from conesim.localization.ekf import EkfConfig
 from conesim.localization.modes import LOCALIZATION_MODES
 from conesim.localization.slam import SlamConfig
@@ -121,7 +122,9 @@ class EnvConfig:
         rewards: reward weights.
         faults: what goes wrong with the sensors (``sim.sensors.faults``).
         ekf: the filter's settings; None: the tuning ``ekf_tuning`` names
-            (``auto``: matched to the sensors, ``envs.ekf_tuning``).
+            (``auto``: matched to the sensors, ``envs.ekf_tuning``). Also as a
+            scenario file's ``ekf:``: a tuning's name, or ``{"tuning": name,
+            field: value}`` (the fields over that tuning's).
         ekf_tuning: as ``Scenario.ekf_tuning``.
         vehicle: the car.
         cone_map: the cone map's survey error (``cones`` localization), as
@@ -164,6 +167,7 @@ class EnvConfig:
         if not isinstance(self.sensors, SensorProfile):
             _choice("sensors", self.sensors, tuple(SENSOR_PROFILES))
         object.__setattr__(self, "track_seeds", _seed_range(self.track_seeds))
+        self._split_ekf_tuning()
         parts = (
             ("faults", Faults),
             ("vehicle", VehicleParams),
@@ -280,6 +284,27 @@ class EnvConfig:
             stuck_progress=self.stuck_progress,
             stuck_grace=self.stuck_grace,
         )
+
+    def _split_ekf_tuning(self) -> None:
+        """``ekf="consumer"`` or ``ekf={"tuning": "consumer", ...}`` as a scenario file
+        reads it (``scenario_file.ekf_from_data``: the fields over the tuning's)."""
+        ekf = self.ekf
+        if isinstance(ekf, str):
+            ekf = {"tuning": ekf}
+        if not (isinstance(ekf, Mapping) and "tuning" in ekf):
+            return
+        if self.ekf_tuning != "auto":
+            raise ValueError(
+                f"EnvConfig: the tuning given twice, ekf={self.ekf!r} and "
+                f"ekf_tuning={self.ekf_tuning!r}; give one"
+            )
+        if isinstance(self.sensors, SensorProfile):
+            sensors, base = self.sensors, tuning_name(self.sensors)
+        else:
+            sensors, base = get_profile(self.sensors), self.sensors
+        config, tuning = ekf_from_data(ekf, base, sensors)
+        object.__setattr__(self, "ekf", config)
+        object.__setattr__(self, "ekf_tuning", tuning)
 
     def to_scenario(self) -> Scenario:
         """The scenario the env's episodes run (its seed: ``reset``'s, not this)."""

@@ -221,7 +221,7 @@ def _scenario(data: dict[str, Any]) -> Scenario:
     values["sensors"] = sensors
     if data.get("faults") is not None:
         values["faults"] = build(Faults, data["faults"], path=("faults",))
-    values["ekf"], values["ekf_tuning"] = _ekf(data.get("ekf"), base, sensors)
+    values["ekf"], values["ekf_tuning"] = ekf_from_data(data.get("ekf"), base, sensors)
     values["autopilot"] = _autopilot(data.get("autopilot"), localization)
     if data.get("vehicle") is not None:
         values["vehicle"] = build(VehicleParams, data["vehicle"], path=("vehicle",))
@@ -318,7 +318,9 @@ def _sensors(value: Any) -> tuple[str, SensorProfile]:
     return name, build(SensorProfile, rest, base=get_profile(name), path=("sensors",))
 
 
-def _ekf(value: Any, base: str, sensors: SensorProfile) -> tuple[EkfConfig | None, EkfTuning]:
+def ekf_from_data(
+    value: Any, base: str, sensors: SensorProfile
+) -> tuple[EkfConfig | None, EkfTuning]:
     """The filter's settings (None: left to follow the sensors) and the tuning's name.
 
     ``base`` is the shipped profile the sensors started from: a profile

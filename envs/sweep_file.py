@@ -282,9 +282,9 @@ def load_sweep(path: str | os.PathLike[str]) -> Sweep:
     if version != FORMAT_VERSION or isinstance(version, bool):
         raise reader.error((FORMAT_KEY,), f"unknown format version {version!r}; allowed: 1")
     if ("axes" in data) == ("points" in data):
-        given = "both" if "axes" in data else "neither"
+        has = "both" if "axes" in data else "neither"
         raise FieldError(
-            (), f"give either axes (their product) or points (a list); it has {given}", source
+            (), f"give either axes (their product) or points (a list); it has {has}", source
         )
     here = os.path.dirname(source)
     base, base_source, base_lines = _base(data.get("base"), reader, here)

@@ -14,6 +14,7 @@ from conesim import envs
 from conesim.envs.config import EnvConfig
 from conesim.envs.expert import AutopilotExpert
 from conesim.envs.scenario import Scenario
+from conesim.envs.scenario_file import load_scenario
 from conesim.planner import AutopilotConfig
 from conesim.sim.sensors import ConeFaults, Faults, get_profile, override
 from conesim.sim.vehicle_params import VehicleParams
@@ -107,3 +108,20 @@ def test_the_env_default_autopilot_stays_the_localizations() -> None:
     assert expert.autopilot is not None
     assert expert.autopilot.config == AutopilotConfig.cautious()
     env.close()
+
+
+def test_ekf_takes_a_scenario_files_forms(tmp_path: Path) -> None:
+    """``ekf="consumer"`` and ``ekf={"tuning": "consumer", "gate_probability": 0.99}``
+    are what the same ``ekf:`` in a scenario file gives; with ``ekf_tuning`` too, an error."""
+    for value, text in (
+        ("consumer", "ekf: consumer\n"),
+        ({"tuning": "consumer", "gate_probability": 0.99}, "ekf: {tuning: consumer, "
+         "gate_probability: 0.99}\n"),
+    ):  # fmt: skip
+        (tmp_path / "s.yaml").write_text(text)
+        scenario = load_scenario(tmp_path / "s.yaml")
+        config = EnvConfig(ekf=value)
+        assert (config.ekf, config.ekf_tuning) == (scenario.ekf, scenario.ekf_tuning)
+    assert config.ekf is not None and config.ekf.gate_probability == 0.99
+    with pytest.raises(ValueError, match="the tuning given twice"):
+        EnvConfig(ekf="consumer", ekf_tuning="rtk")
