@@ -403,22 +403,11 @@ def _bag_errors() -> Iterator[None]:
 
 
 def _check_render_extra() -> None:
-    try:
-        import pygame  # noqa: F401, PLC0415
-    except ImportError:
-        raise CliError(
-            '--render needs pygame: install the render extra, pip install "conesim[render]"'
-        ) from None
-    # On Linux without a display pygame falls back to a driver that shows
-    # nothing: the run would be slow (drawing every frame) and silent.
-    # A driver chosen by the user (kmsdrm, fbcon, dummy, ...) is trusted.
-    if (
-        sys.platform.startswith("linux")
-        and not os.environ.get("DISPLAY")
-        and not os.environ.get("WAYLAND_DISPLAY")
-        and not os.environ.get("SDL_VIDEODRIVER")
-    ):
-        raise CliError("--render needs a display (DISPLAY or WAYLAND_DISPLAY is not set)")
+    from conesim.envs.render import window_problem  # noqa: PLC0415 (with the loop: cmd_run)
+
+    problem = window_problem()
+    if problem is not None:
+        raise CliError(f"--render: {problem}")
 
 
 def _write_outputs(

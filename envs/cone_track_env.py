@@ -137,7 +137,7 @@ from conesim.envs.observation import (
     build_vector,
     observation_space,
 )
-from conesim.envs.render import Renderer, Scene, SceneKeeper
+from conesim.envs.render import Renderer, Scene, SceneKeeper, window_problem
 from conesim.envs.scenario import Localization
 from conesim.planner.messages import ControlCommand
 from conesim.sim.events import RaceStanding
@@ -172,6 +172,10 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
                 f"render_mode {render_mode!r}; allowed: {self.metadata['render_modes']}"
+            )
+        if render_mode == "human" and (problem := window_problem()) is not None:
+            raise gym.error.DependencyNotInstalled(
+                f'render_mode "human": {problem}; or "rgb_array"'
             )
         self.render_mode = render_mode
         # One frame per action: the recorded or shown video runs in real time.

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import contextlib
 import math
+import os
+import sys
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -36,6 +38,25 @@ from conesim.tracks import ConeKind
 from conesim.tracks.global_path import GlobalPath
 
 FloatArray = NDArray[np.float64]
+
+
+def window_problem() -> str | None:
+    """Why a ``human`` window cannot be shown here, or None: pygame missing (the
+    ``render`` extra), or, on Linux, no display. Without one pygame falls back to a
+    driver that shows nothing, so a run would draw every frame, slowly and unseen;
+    a driver the user chose (``SDL_VIDEODRIVER``: kmsdrm, fbcon, dummy) is trusted."""
+    try:
+        import pygame  # noqa: F401, PLC0415
+    except ImportError:
+        return 'pygame is not installed; install the render extra: pip install "conesim[render]"'
+    if (
+        sys.platform.startswith("linux")
+        and not os.environ.get("DISPLAY")
+        and not os.environ.get("WAYLAND_DISPLAY")
+        and not os.environ.get("SDL_VIDEODRIVER")
+    ):
+        return "no display (DISPLAY or WAYLAND_DISPLAY is not set)"
+    return None
 
 
 def _empty() -> FloatArray:
@@ -257,15 +278,10 @@ class Renderer:
                 )  # fmt: skip
 
     def show(self, frame: NDArray[np.uint8], fps: float) -> None:
-        """Show a frame in a pygame window (``human`` mode)."""
-        try:
-            import pygame  # noqa: PLC0415
-        except ImportError as exc:
-            from gymnasium.error import DependencyNotInstalled  # noqa: PLC0415
+        """Show a frame in a pygame window (``human`` mode; ``window_problem`` was asked
+        when the mode was chosen)."""
+        import pygame  # noqa: PLC0415
 
-            raise DependencyNotInstalled(
-                'pygame is not installed; install the render extra: pip install "conesim[render]"'
-            ) from exc
         if self._window is None:
             # Only the display: pygame.init() also opens the audio device,
             # which prints ALSA errors on a machine without one.

@@ -214,7 +214,11 @@ def test_run_render_without_a_display(
         monkeypatch.delenv(name, raising=False)
     out = tmp_path / "out"
     code, _, err = run_cli(["run", "--render", "--out", str(out)], capsys)
-    assert code == 2 and "--render needs a display" in err and not out.exists()
+    assert (
+        code == 2
+        and "--render: no display (DISPLAY or WAYLAND_DISPLAY is not set)" in err
+        and not out.exists()
+    )
 
 
 def trackdrive_with_global_path(tmp_path: Path, csv: str) -> Path:

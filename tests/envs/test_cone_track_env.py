@@ -210,13 +210,25 @@ def test_step_needs_reset_and_an_action_of_two() -> None:
 
 
 def test_human_mode_without_pygame_names_the_extra(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Without pygame, human rendering fails with DependencyNotInstalled naming the extra."""
+    """Without pygame, asking for human rendering fails at once, naming the extra."""
     import sys
 
     monkeypatch.setitem(sys.modules, "pygame", None)  # import pygame -> ImportError
-    env = ConeTrackEnv(render_mode="human")
     with pytest.raises(gym.error.DependencyNotInstalled, match=r"conesim\[render\]"):
-        env.reset(seed=0)
+        ConeTrackEnv(render_mode="human")
+
+
+def test_human_mode_without_a_display_says_so(monkeypatch: pytest.MonkeyPatch) -> None:
+    """On Linux with no display (and no SDL driver chosen) a window would show nothing:
+    refused when made, pointing at rgb_array; a chosen driver is trusted."""
+    pytest.importorskip("pygame")
+    monkeypatch.setattr("sys.platform", "linux")
+    for name in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER"):
+        monkeypatch.delenv(name, raising=False)
+    with pytest.raises(gym.error.DependencyNotInstalled, match=r"no display.*rgb_array"):
+        ConeTrackEnv(render_mode="human")
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
+    assert ConeTrackEnv(render_mode="human").render_mode == "human"
 
 
 def test_reset_options_last_one_episode_and_bad_ones_change_nothing() -> None:
