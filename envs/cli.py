@@ -62,6 +62,7 @@ from conesim.tracks import (
     Layout,
     Track,
     TrackFormatError,
+    TrackNotFoundError,
     TrackSource,
     TrackSpec,
     check_report,
@@ -110,10 +111,27 @@ def cmd_tracks() -> int:
 
 
 def _load_track(name: TrackSource, option: str) -> Track:
-    """``load_track`` that refuses an empty name (which would read the current directory)."""
+    """``load_track`` that refuses an empty name (which would read the current directory);
+    a track it cannot find is said with ``option``, where it was given."""
     if not track_label(name).strip():
         raise CliError(f"{option}: empty track name; give a shipped track name or a track file")
-    return load_track(name)
+    try:
+        return load_track(name)
+    except TrackNotFoundError as exc:
+        raise CliError(f"{option}: {exc}") from None
+
+
+def _track_option(args: argparse.Namespace) -> str:
+    """Where the run's track was given, for its errors: the flag, the last ``--set`` of
+    it, the scenario file (a relative file is beside it), or the default."""
+    if args.track is not None:
+        return f"--track {args.track}"
+    sets = [item for item in args.set or () if item.partition("=")[0].strip() == "track"]
+    if sets:
+        return f"--set {sets[-1]}"
+    if args.scenario is not None:
+        return f"{args.scenario}: track (a file is looked for beside the scenario file)"
+    return "track"
 
 
 def cmd_track_show(name: str, out: str) -> int:
@@ -273,7 +291,7 @@ def cmd_scenario_show(args: argparse.Namespace) -> int:
     from conesim.envs.scenario_file import scenario_yaml  # noqa: PLC0415 (with the loop)
 
     scenario = _scenario(args)
-    _load_track(scenario.track, "track")
+    _load_track(scenario.track, _track_option(args))
     sys.stdout.write(scenario_yaml(scenario))
     return EXIT_OK
 
@@ -299,7 +317,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.bag is not None and not args.bag.strip():
         raise CliError("--bag: empty directory name; give the bag's directory")
     scenario = _scenario(args)
-    track = _load_track(scenario.track, "--track" if args.track is not None else "track")
+    track = _load_track(scenario.track, _track_option(args))
     global_path = global_path_for_track(track)
     errors = check_report(track)["errors"]
     if errors:

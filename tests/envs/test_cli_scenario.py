@@ -130,7 +130,10 @@ def test_scenario_show_without_a_file_shows_what_the_flags_run(
         (["run", "--set", "laps=0"], "--set laps=0: laps: Scenario.laps = 0 is out of range"),
         (["run", "missing.yaml"], "missing.yaml: no such file"),
         (["run", "--out", "/"], "--out /: is the root directory"),
-        (["scenario", "show", "--track", "monza"], "'monza' is neither a shipped track"),
+        (["scenario", "show", "--track", "monza"],
+         "--track monza: 'monza' is neither a shipped track"),
+        (["run", "--set", "track=../x.yaml"],
+         "--set track=../x.yaml: '../x.yaml' is neither a shipped track"),
     ],
 )  # fmt: skip
 def test_every_command_line_error_is_one_line_exit_2(
@@ -144,6 +147,18 @@ def test_every_command_line_error_is_one_line_exit_2(
     assert len(err.splitlines()) == 1, err
     assert err.startswith("conesim: error: ") and message in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_missing_track_in_a_scenario_file_names_the_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``track: nosuch.yaml`` in a scenario: the error names the file and where a
+    relative track is looked for."""
+    (tmp_path / "s.yaml").write_text("track: nosuch.yaml\n")
+    code, _, err = cli(["run", str(tmp_path / "s.yaml"), "--out", str(tmp_path / "o")], capsys)
+    assert code == 2 and not (tmp_path / "o").exists()
+    assert err.startswith(f"conesim: error: {tmp_path / 's.yaml'}: track (a file is looked for "
+                          "beside the scenario file): 'nosuch.yaml' is neither"), err  # fmt: skip
 
 
 def test_a_bad_scenario_file_writes_nothing(
