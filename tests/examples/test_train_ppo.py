@@ -53,8 +53,10 @@ def test_the_json_has_the_figures(run: Path) -> None:
     assert training["steps_per_s"] > 0
     assert summary["settings"]["ppo"]["n_steps"] == 256
     # the training envs' own rules are recorded; the evaluation's env keeps the defaults
-    assert summary["settings"]["train_env"] == {"stuck_time": 4, "stuck_grace": 6}
+    train_env = {"physics_rate": 100.0, "stuck_time": 4, "stuck_grace": 6}
+    assert summary["settings"]["train_env"] == train_env
     assert "stuck_time" not in summary["settings"]["env"]
+    assert "physics_rate" not in summary["settings"]["env"]
     lines = (run / "curve.csv").read_text(encoding="utf-8").splitlines()
     assert lines[0].split(",")[:3] == ["step", "return", "progress_m"]
     assert training["episodes"] == len(lines) - 1 > 0
