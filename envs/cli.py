@@ -314,8 +314,11 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     if not args.out.strip():
         raise CliError("--out: empty directory name; give the output directory")
-    if args.bag is not None and not args.bag.strip():
-        raise CliError("--bag: empty directory name; give the bag's directory")
+    if args.bag is not None:  # first: an empty name is the working directory, --out's parent
+        from conesim.envs.bag import check_bag_target  # noqa: PLC0415 (with the loop: cmd_run)
+
+        with _bag_errors():
+            check_bag_target(args.bag)
     scenario = _scenario(args)
     track = _load_track(scenario.track, _track_option(args))
     global_path = global_path_for_track(track)

@@ -528,7 +528,7 @@ def test_a_reader_that_goes_away_ends_the_command_quietly(
     [
         (["run", "", "--out", "o"], "empty scenario file name"),
         (["scenario", "show", ""], "empty scenario file name"),
-        (["run", "--bag", "", "--out", "o"], "--bag: empty directory name"),
+        (["run", "--bag", "", "--out", "o"], "--bag (empty name): give the bag directory"),
         (["sweep", "", "--out", "o"], "sweep: empty sweep file name"),
     ],
 )
