@@ -72,6 +72,7 @@ from conesim.tracks import (
     track_label,
     write_track,
 )
+from conesim.tracks.generate.spec import SEED_LIMIT
 from conesim.tracks.global_path import (
     GlobalPath,
     GlobalPathError,
@@ -206,7 +207,7 @@ def cmd_track_generate(args: argparse.Namespace) -> int:
         raise CliError(f"--out {out}: is a directory; give a .yaml file name")
     if target.suffix not in (".yaml", ".yml"):
         raise CliError(f"--out {out}: a conesim track file ends in .yaml")
-    if not 0 <= args.seed < 2**63:
+    if not 0 <= args.seed < SEED_LIMIT:
         raise CliError(f"--seed {args.seed}: must be a non-negative integer below 2**63")
     given = {field: getattr(args, flag) for flag, field in GENERATE_FLAGS.items()}
     try:
@@ -269,7 +270,7 @@ def _scenario(args: argparse.Namespace) -> Scenario:
 
     The flags' own ranges are checked first, so that their errors name them.
     """
-    from conesim.envs.scenario import MAX_LAPS, SEED_LIMIT  # noqa: PLC0415 (with the loop)
+    from conesim.envs.scenario import MAX_LAPS  # noqa: PLC0415 (with the loop)
     from conesim.envs.scenario_file import load_scenario  # noqa: PLC0415 (with the loop)
 
     if args.laps is not None and not 1 <= args.laps <= MAX_LAPS:

@@ -27,7 +27,7 @@ import numpy as np
 from conesim.envs.dataclass_io import build
 from conesim.envs.ekf_tuning import tuning_name
 from conesim.envs.loop import EpisodeRules
-from conesim.envs.scenario import EkfTuning, Localization, Scenario
+from conesim.envs.scenario import SEED_LIMIT, EkfTuning, Localization, Scenario
 from conesim.envs.scenario_file import ekf_from_data, load_scenario, track_from_data
 from conesim.localization.ekf import EkfConfig
 from conesim.localization.modes import LOCALIZATION_MODES
@@ -371,7 +371,7 @@ def _seed_range(value: Any) -> range:
         raise ValueError(
             f"EnvConfig.track_seeds must be a range or a pair (lo, hi) of integers, got {value!r}"
         )
-    if not seeds or min(seeds[0], seeds[-1]) < 0 or max(seeds[0], seeds[-1]) >= 2**63:
+    if not seeds or min(seeds[0], seeds[-1]) < 0 or max(seeds[0], seeds[-1]) >= SEED_LIMIT:
         raise ValueError(
             f"EnvConfig.track_seeds = {value!r} is out of range: allowed a non-empty range "
             "of seeds in [0, 2**63)"

@@ -46,6 +46,7 @@ from conesim.sim.sensors import DEFAULT_PROFILE, Faults, SensorProfile, apply_fa
 from conesim.sim.vehicle_params import VehicleParams
 from conesim.sim.world import WorldConfig
 from conesim.tracks import DEFAULT_TRACK, GeneratedTrack, Track, track_label
+from conesim.tracks.generate.spec import SEED_LIMIT  # a seed is an integer in [0, it)
 from conesim.tracks.survey import ConeSurvey, PathSurvey
 
 Localization = Literal["fused", "raw", "truth", "cones", "slam"]
@@ -55,7 +56,6 @@ EkfTuning = Literal["auto", "ideal", "rtk", "consumer", "consumer_white", "custo
 AutopilotPreset = Literal["auto", "default", "cautious"]
 """The autopilot settings a scenario's start from: ``auto`` follows the localization."""
 
-SEED_LIMIT = 2**63  # a seed is a non-negative integer below this
 MAX_LAPS = 100  # [-] at a minute a lap, over an hour and a half of simulated driving
 RATE_LIMITS = {"control_rate": (1.0, 1000.0), "physics_rate": (1.0, 10_000.0)}  # [Hz]
 """The loop's and the physics' rates allowed: below 1 Hz a step outlasts a corner;

@@ -130,10 +130,17 @@ class _Places:
         return self.places.get((), self.source)
 
 
-def _expand(data: dict[str, Any], key: str) -> None:
-    """A group given by name becomes a mapping: ``sensors: consumer`` -> {profile: consumer}."""
-    if key in SHORTHAND and isinstance(data.get(key), str):
-        data[key] = {SHORTHAND[key]: data[key]}
+def _expand(data: dict[str, Any], key: str, sub: str | None = None) -> None:
+    """A group given by name becomes a mapping: ``sensors: consumer`` -> {profile: consumer};
+    a track named or in a file gives way to a generated one when ``sub`` (the next key
+    being set under ``key``) is ``generate``."""
+    value = data.get(key)
+    if not isinstance(value, str):
+        return
+    if key in SHORTHAND:
+        data[key] = {SHORTHAND[key]: value}
+    elif key == "track" and sub == "generate":
+        data[key] = {}
 
 
 def apply_override(data: dict[str, Any], override: Override) -> None:
@@ -150,11 +157,9 @@ def apply_override(data: dict[str, Any], override: Override) -> None:
     if not all(parts):
         raise FieldError((), f"bad key {override.key!r}: expected names joined by dots")
     node = data
-    if parts[:2] == ["track", "generate"] and isinstance(data.get("track"), str):
-        data["track"] = {}  # a track named or in a file gives way to a generated one
     for depth, part in enumerate(parts[:-1]):
         if depth == 0:
-            _expand(node, part)
+            _expand(node, part, parts[1])
         child = node.setdefault(part, {})
         if child is None:
             child = node[part] = {}
