@@ -166,10 +166,21 @@ def cmd_track_show(name: str, out: str) -> int:
 
 
 def cmd_track_check(name: str, as_json: bool) -> int:
-    """Validate a track; exit 0 when it has no errors."""
-    track = _load_track(name, "track")
-    # A malformed global path CSV is bad input too (exit 2).
-    report = check_report(track)
+    """Validate a track; exit 0 when it has no errors.
+
+    A track that cannot be read (or a malformed global path CSV) is bad input:
+    exit 2 and one line on stderr; with ``--json`` its lines are also printed
+    on stdout as ``{"track": ..., "input_error": true, "errors": [...]}``, so a
+    script reading stdout gets JSON either way.
+    """
+    try:
+        track = _load_track(name, "track")
+        report = check_report(track)
+    except (*INPUT_ERRORS, CliError) as exc:
+        if as_json:
+            lines = str(exc).splitlines() or [""]
+            print(json.dumps({"track": name, "input_error": True, "errors": lines}))
+        raise
     if as_json:
         print(json.dumps(report))
     else:

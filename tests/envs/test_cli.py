@@ -242,6 +242,23 @@ def test_track_check_reports_a_broken_global_path(
     track_file = trackdrive_with_global_path(tmp_path, "37.5,abc,0.1\n37.6,127.0,0.1\n")
     code, _, err = run_cli(["track", "check", str(track_file)], capsys)
     assert code == 2 and "t_path.csv:1" in err and "abc" in err
+    code, out, err = run_cli(["track", "check", str(track_file), "--json"], capsys)
+    report = json.loads(out)
+    assert code == 2 and report["input_error"] is True and report["track"] == str(track_file)
+    assert len(report["errors"]) == 1 and "t_path.csv:1" in report["errors"][0]
+    assert err.strip() == f"conesim: error: {report['errors'][0]}"
+
+
+def test_track_check_json_of_a_missing_track_is_json(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`track check --json` of a track that is not there: exit 2, the error on
+    stderr and as JSON on stdout; without --json, stdout stays empty."""
+    missing = str(tmp_path / "nope.yaml")
+    code, out, err = run_cli(["track", "check", missing, "--json"], capsys)
+    assert code == 2 and json.loads(out)["errors"] == [err.strip().removeprefix("conesim: error: ")]
+    code, out, _ = run_cli(["track", "check", missing], capsys)
+    assert code == 2 and out == ""
 
 
 def test_a_global_path_of_another_place_is_an_error(
