@@ -50,6 +50,7 @@ from conesim.envs.yaml_io import dump_yaml, parse_value
 from conesim.planner.config import AutopilotConfig, SpeedProfileConfig
 from conesim.planner.global_fit import smoothed_global_path
 from conesim.planner.global_speed import GlobalSpeedPlan
+from conesim.planner.lap_map import lap_time
 from conesim.tracks import Track
 from conesim.tracks.generate import Size, TrackGenerationError, TrackSpec, generate_track
 from conesim.tracks.global_path import global_path_for_track
@@ -125,9 +126,7 @@ def plan_lap_time(track: Track, config: SpeedProfileConfig) -> float:
     path = smoothed_global_path(
         global_path_for_track(track), AutopilotConfig().global_path_min_scatter
     )
-    plan = GlobalSpeedPlan(path, config)
-    v = 0.5 * (plan.speeds[1:] + plan.speeds[:-1])
-    return float(np.sum(np.diff(plan.stations) / v))
+    return lap_time(GlobalSpeedPlan(path, config))
 
 
 def track_laps(seeds: range, config: SpeedProfileConfig) -> dict[int, tuple[float, float]]:

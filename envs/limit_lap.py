@@ -32,7 +32,7 @@ where the car starts and is timed between its two timing lines, as the
 simulated run is.
 
 **The limit of a track** (``track_lap_limit``): a loop's, and the skidpad's
-timed circle's, is the fastest of the lines ``envs.racing_line`` offers, the
+timed circle's, is the fastest of the lines ``planner.racing_line`` offers, the
 blends ``BLENDS`` of its minimum-curvature line with its shortest path (and
 ``BLEND_REFINE`` either side of the fastest of them), all inside the cones
 less half the car's width and ``racing_line.MARGIN_M``, each timed by the
@@ -55,8 +55,8 @@ from scipy.ndimage import uniform_filter1d
 from scipy.optimize import brentq
 
 from conesim.core.polyline import Polyline
-from conesim.envs.racing_line import MARGIN_M, Corridor, racing_lines, spline_grid
 from conesim.envs.traction import AxleLimits
+from conesim.planner.racing_line import MARGIN_M, Corridor, racing_lines, spline_grid
 from conesim.sim.progress import PolylineProgress
 from conesim.sim.race_control import line_crossings_along
 from conesim.sim.vehicle_params import VehicleParams

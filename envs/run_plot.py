@@ -3,7 +3,7 @@
 Three panels:
 
 - the map: the cones by kind, the global path by covariance status, the
-  racing line of the lap-time limit (a loop's; ``envs.racing_line``), the
+  racing line of the lap-time limit (a loop's; ``planner.racing_line``), the
   car's trajectory (its CG, the truth) drawn over them, and the run's events:
   cones hit (rings) and knocked down or out (crosses), the stretches driven
   off the track (red), where each lap ended (numbered) and where the run

@@ -77,6 +77,7 @@ from conesim.planner.config import AutopilotConfig
 from conesim.planner.geometry import FloatArray, PathProjector, arc_length
 from conesim.planner.global_fit import smoothed_global_path
 from conesim.planner.global_speed import GlobalSpeedPlan
+from conesim.planner.lap_map import LapMap
 from conesim.planner.messages import ControlCommand
 from conesim.planner.midline import LocalPlan, PlanStatus, reference_path_planning
 from conesim.planner.pure_pursuit import SteeringResult, lookahead_distance, pure_pursuit
@@ -215,6 +216,13 @@ class Autopilot:
         self.tf_latest_count = 0
         self.skipped_count = 0
         self.station_hint: float | None = None  # [m] the sensor's last station
+        self.path_speeds: FloatArray = np.zeros(0)  # [m/s] at the path's points
+        # Lap 1 maps the cones; from lap 2 a racing line through them (``racing_line``).
+        self.lap_map = LapMap() if self.config.racing_line and global_path.closed else None
+        self.racing: GlobalSpeedPlan | None = None
+        self.travelled = 0.0  # [m] along the global path, while lap 1 maps
+        self._racing_station: float | None = None
+        self._racing_projector: PathProjector | None = None
         self._last_control: float | None = None
 
     # -- intermediates -----------------------------------------------------------------------
@@ -302,15 +310,68 @@ class Autopilot:
                 err,
             )
             return None
+        self._map_lap(classified)
+        speeds = plan.speeds
+        racing = self._racing_segment() if self.racing is not None else None
+        if racing is not None:
+            path_reference, speeds, curvature = racing
         self.path_curvature = curvature  # set with the plan it belongs to
         self.classified = classified
         self.station_hint = classified.sensor_station
         self.plan = plan
         self.path_reference = path_reference
+        self.path_speeds = speeds
         self.plan_count += 1
         self.fallback_count += plan.status is PlanStatus.FALLBACK
         self.failed_count += plan.status is PlanStatus.FAILED
         return plan
+
+    def _map_lap(self, classified: ClassifiedCones) -> None:
+        """Lap 1: fold the scan into the lap map; once the sensor has gone round the
+        global path, make the racing line (``AutopilotConfig.racing_line``)."""
+        if self.lap_map is None or self.racing is not None:
+            return
+        if self.station_hint is not None:
+            length = self.projector.line.end_station
+            step = classified.sensor_station - self.station_hint
+            self.travelled += (step + 0.5 * length) % length - 0.5 * length
+        self.lap_map.add(classified.points, classified.side)
+        if self.travelled < self.projector.line.end_station:
+            return
+        c = self.config
+        try:
+            path = self.lap_map.racing_path(
+                self.global_path, c.midline.body_half_width + c.racing_margin, c.speed_profile
+            )
+        except (ValueError, ArithmeticError) as exc:
+            _log.warning("no racing line through the lap-1 map (%s); the midline stays", exc)
+            self.lap_map = None
+            return
+        self.racing = GlobalSpeedPlan(path, c.speed_profile)
+        self._racing_projector = PathProjector(path.polyline)
+
+    def _racing_segment(self) -> tuple[FloatArray, FloatArray, FloatArray] | None:
+        """The racing line from 3 m behind the sensor to the planner's range ahead,
+        in ``reference``: points, speeds (accelerating from the car's speed) and
+        curvature; None where the frame tree has no pose (the cones' plan stays)."""
+        racing, projector = self.racing, self._racing_projector
+        assert racing is not None and projector is not None
+        c = self.config
+        try:
+            sensor = self.buffer.lookup_pose2d(c.reference_frame, c.sensor_frame, LATEST)
+        except TransformError:
+            return None
+        here = np.array([[sensor.x, sensor.y]])
+        hint = self._racing_station
+        window = None if hint is None else (hint - 5.0, hint + c.midline.max_range)
+        station = float(projector.project(here, window=window).station[0])
+        self._racing_station = station
+        stations = station + np.arange(-3.0, c.midline.max_range + 0.25, 0.5)
+        points = racing.points_at(stations)
+        s = stations - stations[0]
+        v = racing.speeds_at(stations)
+        v[0] = min(v[0], max(self.speed(), 0.0))
+        return points, forward_pass(s, v, c.speed_profile.a_drive), racing.curvature_at(stations)
 
     def _global_speeds(
         self, path: FloatArray, s: FloatArray | None, *, sensor_station: float
@@ -439,7 +500,7 @@ class Autopilot:
         cap = self._lookahead_cap(self.pursuit_path, curvature, speed)
         self.steering = pure_pursuit(self.pursuit_path, speed, c.pure_pursuit, cap)
         axle = np.array([c.pure_pursuit.rear_axle_x, 0.0])
-        v_ref, a_ff = target_on_path(path, self.plan.speeds, axle, speed, c.speed_control)
+        v_ref, a_ff = target_on_path(path, self.path_speeds, axle, speed, c.speed_control)
         self.target_speed = v_ref
         a_lat = speed * speed * math.tan(self.steering.steering) / c.pure_pursuit.wheelbase
         acceleration = self.speed_controller.step(v_ref, speed, dt, a_ff, a_lat)

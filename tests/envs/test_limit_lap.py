@@ -18,7 +18,7 @@ from conesim.envs.limit_lap import (
     qss_speed_profile,
     track_lap_limit,
 )
-from conesim.envs.racing_line import MARGIN_M, RacingLineError
+from conesim.planner.racing_line import MARGIN_M, RacingLineError
 from conesim.sim.vehicle_params import VehicleParams
 from conesim.tracks import ConeKind, Layout, Track, load_track
 

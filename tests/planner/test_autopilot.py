@@ -88,6 +88,22 @@ def drive(
     return autopilot, commands, trace
 
 
+def test_after_lap_one_the_car_races_the_inner_circle(synth: ModuleType, circle) -> None:
+    """On the R = 15 m circle, 3 m wide, the lap-1 map's racing line is the
+    inner circle (the fastest on a ring): once the car has gone round, it
+    drives it: R 13.5 + 0.7 m half width + 0.4 m margin."""
+    racing = AutopilotConfig.from_dict(
+        {"pure_pursuit": {"slip_stiffness": math.inf}, "racing_line": True, "racing_margin": 0.4}
+    )
+    autopilot, _, trace = drive(synth, circle, 16.0, racing)
+    assert autopilot.racing is not None
+    lap_one = next(i for i, (t, _, _) in enumerate(trace) if t >= 9.0)
+    radius = np.array([math.hypot(p.x, p.y) for _, p, _ in trace])
+    assert np.max(np.abs(radius[: lap_one // 2] - 15.0)) < 0.3  # lap 1: the midline
+    late = radius[-300:]  # the last 3 s
+    assert late.min() > 14.5 and late.max() < 14.8  # the antenna, ahead of the axle
+
+
 def test_closed_loop_on_a_circle(synth: ModuleType, circle) -> None:
     """12 s on the R = 15 m circle: within 0.3 m of the centreline, up to speed, no fallback.
 
@@ -349,6 +365,7 @@ def test_lookahead_cap_reads_the_corner_beyond_the_cones(synth: ModuleType, hair
         assert keep >= 2
         autopilot.plan = dataclasses.replace(plan, path=plan.path[:keep], speeds=plan.speeds[:keep])
         autopilot.path_reference = autopilot.path_reference[:keep]
+        autopilot.path_speeds = autopilot.path_speeds[:keep]
         autopilot.path_curvature = autopilot.path_curvature[:keep]
         autopilot.control(scene.stamp)
         target = pose.transform_points(autopilot.lookahead_point[None])[0]

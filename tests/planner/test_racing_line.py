@@ -1,4 +1,4 @@
-"""Tests for envs.racing_line: the minimum-curvature QP against worked geometry."""
+"""Tests for planner.racing_line: the minimum-curvature QP against worked geometry."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from conesim.core.polyline import Polyline
-from conesim.envs.racing_line import (
+from conesim.planner.racing_line import (
     Corridor,
     offset_bounds,
     racing_lines,
