@@ -93,3 +93,17 @@ def test_shortest_path_of_a_straight_lane_is_its_centre() -> None:
     normals = np.tile([0.0, 1.0], (len(x), 1))
     alpha = shortest_path_offsets(ref, normals, np.full(len(x), -1.0), np.full(len(x), 1.0))
     assert_allclose(alpha, 0.0, atol=1e-6)
+
+
+def test_a_lane_too_narrow_for_the_clearance_gives_a_smooth_line() -> None:
+    """A 3 m ring of R 9 m bounded by chords between cones ~3 m apart, with a
+    clearance of half the lane: the chords scallop the lane by the sagitta
+    (3^2 / (8 R), 0.1-0.2 m) at the cones' spacing. Held to the raw middle the
+    line would zigzag with it (|kappa| up to ~0.4 1/m, a few m/s off every
+    corner); held to the middle of the smoothed bounds it is a circle."""
+    radius, width = 9.0, 3.0
+    inner = ring(radius - width / 2, round(2 * math.pi * (radius - width / 2) / 3.0))
+    outer = ring(radius + width / 2, round(2 * math.pi * (radius + width / 2) / 3.0))
+    corridor = Corridor(ring(radius, 400), Polyline(inner, True), Polyline(outer, True), 1.5)
+    line = Polyline(racing_lines(corridor).line(0.5), True)
+    assert_allclose(line.curvature(), 1.0 / np.mean(np.hypot(*line.points.T)), atol=0.01)
