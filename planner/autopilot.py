@@ -77,7 +77,7 @@ from conesim.planner.config import AutopilotConfig
 from conesim.planner.geometry import FloatArray, PathProjector, arc_length
 from conesim.planner.global_fit import smoothed_global_path
 from conesim.planner.global_speed import GlobalSpeedPlan
-from conesim.planner.lap_map import LapMap
+from conesim.planner.lap_map import LapMap, lap_time
 from conesim.planner.messages import ControlCommand
 from conesim.planner.midline import LocalPlan, PlanStatus, reference_path_planning
 from conesim.planner.pure_pursuit import SteeringResult, lookahead_distance, pure_pursuit
@@ -335,7 +335,8 @@ class Autopilot:
             length = self.projector.line.end_station
             step = classified.sensor_station - self.station_hint
             self.travelled += (step + 0.5 * length) % length - 0.5 * length
-        self.lap_map.add(classified.points, classified.side)
+        own = ~self.memory.recalled[classified.index]  # the scan's own cones, not echoes
+        self.lap_map.add(classified.points[own], classified.side[own])
         if self.travelled < self.projector.line.end_station:
             return
         c = self.config
@@ -347,7 +348,13 @@ class Autopilot:
             _log.warning("no racing line through the lap-1 map (%s); the midline stays", exc)
             self.lap_map = None
             return
-        self.racing = GlobalSpeedPlan(path, c.speed_profile)
+        racing = GlobalSpeedPlan(path, c.speed_profile)
+        if self.global_speed is not None and lap_time(racing) >= lap_time(self.global_speed):
+            # A lane too narrow for the margin leaves no faster line than the midline.
+            _log.info("the racing line laps no faster than the midline; the midline stays")
+            self.lap_map = None
+            return
+        self.racing = racing
         self._racing_projector = PathProjector(path.polyline)
 
     def _racing_segment(self) -> tuple[FloatArray, FloatArray, FloatArray] | None:
@@ -498,7 +505,9 @@ class Autopilot:
             return self.command
         self.pursuit_path, curvature = self._pursuit_path(path, speed)
         cap = self._lookahead_cap(self.pursuit_path, curvature, speed)
-        self.steering = pure_pursuit(self.pursuit_path, speed, c.pure_pursuit, cap)
+        # The racing line's curvature is its own; the midline's is the global path's.
+        own = curvature if self.racing is not None else None
+        self.steering = pure_pursuit(self.pursuit_path, speed, c.pure_pursuit, cap, own)
         axle = np.array([c.pure_pursuit.rear_axle_x, 0.0])
         v_ref, a_ff = target_on_path(path, self.path_speeds, axle, speed, c.speed_control)
         self.target_speed = v_ref

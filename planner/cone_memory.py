@@ -55,6 +55,9 @@ class ConeMemory:
         votes: (m, k) sightings per label of ``CONE_COLOURS``.
         scans: scans taken so far.
         recalled_count: remembered cones added to scans so far.
+        recalled: (n,) which rows of the last scan ``recall`` returned are
+            remembered cones rather than the scan's own (a map of what was
+            seen must not count the memory's echoes as sightings).
     """
 
     def __init__(self, config: ConeMemoryConfig | None = None) -> None:
@@ -65,6 +68,7 @@ class ConeMemory:
         self.votes: NDArray[np.int64] = np.zeros((0, len(CONE_COLOURS)), dtype=np.int64)
         self.scans = 0
         self.recalled_count = 0
+        self.recalled: NDArray[np.bool_] = np.zeros(0, dtype=bool)
 
     def recall(
         self, message: ConeDetections, buffer: Buffer, reference_frame: str, time: float
@@ -76,6 +80,7 @@ class ConeMemory:
         """
         c = self.config
         if not c.enabled:
+            self.recalled = np.zeros(len(message.points), dtype=bool)
             return message
         to_reference = buffer.lookup_transform(reference_frame, message.header.frame_id, time)
         scan = np.asarray(message.points, dtype=float)
@@ -104,6 +109,7 @@ class ConeMemory:
         lacking = np.flatnonzero(~in_scan & trusted)
         self.recalled_count += len(lacking)
         if len(lacking) == 0 and labels is None:
+            self.recalled = np.zeros(len(scan), dtype=bool)
             return message
         recalled = to_reference.inverse().transform_points(self.points[lacking])
         points = np.vstack([scan, np.column_stack([recalled, np.zeros(len(recalled))])])
@@ -114,6 +120,7 @@ class ConeMemory:
             codes = np.concatenate([scan_labels, voted[lacking]])
             colours = [CONE_COLOURS[int(k)] for k in codes]
         order = np.argsort(np.hypot(points[:, 0], points[:, 1]), kind="stable")
+        self.recalled = (np.arange(len(points)) >= len(scan))[order]
         return ConeDetections(
             message.header,
             points[order],

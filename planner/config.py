@@ -450,6 +450,11 @@ class PurePursuitConfig(Settings):
             (``planner.pure_pursuit.rear_slip_angle``); inf: no slip.
         downforce_per_mass: downforce per mass per speed squared [1/m]; the
             normal load per mass is g plus this times v^2.
+        feedforward: steer the path's own curvature, with pure pursuit's
+            arc correcting only the error (``planner.pure_pursuit``).
+        feedforward_preview: the feed-forward's curvature is taken this far
+            ahead of the rear axle's projection, in time at the current
+            speed [s].
     """
 
     wheelbase: float = 1.53  # [m] fssim car.yaml
@@ -466,6 +471,8 @@ class PurePursuitConfig(Settings):
     lookahead_radius_ratio: float = 1.0  # [-]
     slip_stiffness: float = 27.7  # [1/rad] fssim tyre B*C*D = 12.56 * 1.38 * 1.60
     downforce_per_mass: float = 0.01  # [1/m] fssim C_Down 1.903 N s^2/m^2 / 190 kg
+    feedforward: bool = False
+    feedforward_preview: float = 0.1  # [s]
 
     def __post_init__(self) -> None:
         owner = "PurePursuitConfig"
@@ -478,6 +485,7 @@ class PurePursuitConfig(Settings):
         _check(owner, "slip_stiffness", self.slip_stiffness, 1e-9)
         _check(owner, "downforce_per_mass", self.downforce_per_mass, 0.0)
         _check(owner, "rear_axle_x", self.rear_axle_x, -math.inf, math.inf)
+        _check(owner, "feedforward_preview", self.feedforward_preview, 0.0, 2.0)
 
 
 @dataclass(frozen=True)

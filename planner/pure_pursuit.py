@@ -18,6 +18,24 @@ rear axle, searching forward from the path point nearest the axle
 lies inside the circle, the target is its last point; when the point nearest
 the axle already lies outside it, that point. Either way the formula uses the
 target's actual distance.
+
+**Curvature feed-forward** (``feedforward``, off by default). Pure pursuit's
+arc is the mean curvature of the path over the chord ahead, so where the
+path's curvature changes the car leads it: it turns in early and cuts a
+corner's entry, and straightens early at its exit (0.95 s times v dkappa/ds
+of lateral error, measured on generated tracks, 0.4 m at the entry of a
+R 8 m corner at 11 m/s). With the feed-forward the command is::
+
+    kappa = 2 sin(alpha) / L_d  -  2 sin(alpha_0) / L_0  +  kappa_path(s_q + v tau)
+
+alpha_0, L_0 the same construction for a car on the path at the axle's
+projection q, heading along it, and kappa_path the path's own curvature
+``feedforward_preview`` tau ahead of q (the steering's lag): on the path the
+first two terms cancel and the car steers the path's curvature; off it,
+their difference is pure pursuit's correction of the error (the
+feed-forward-and-feedback split of Kapania and Gerdes, "Design of a
+feedback-feedforward steering controller for accurate path tracking and
+stability at the limits of handling", Vehicle System Dynamics 53(12), 2015).
 """
 
 from __future__ import annotations
@@ -136,6 +154,7 @@ def pure_pursuit(
     speed: float,
     config: PurePursuitConfig,
     lookahead_cap: float | None = None,
+    curvature: FloatArray | None = None,
 ) -> SteeringResult:
     """Steer toward the lookahead point of a path (n, 2) in the vehicle's frame [m].
 
@@ -145,6 +164,9 @@ def pure_pursuit(
         config: geometry, limits and lookahead law.
         lookahead_cap: the lookahead distance is at most this [m] (not below
             ``lookahead_min``); None: the law alone.
+        curvature: (n,) the path's curvature at its points [1/m], + left, for
+            the feed-forward (``config.feedforward``; module docstring);
+            None, or another length: pure pursuit alone.
 
     Raises:
         ValueError: ``path`` not (n, 2) with n >= 1 or not finite, or
@@ -165,5 +187,49 @@ def pure_pursuit(
     slip = rear_slip_angle(speed, alpha, distance, config)
     if slip != 0.0:
         delta = math.atan(2.0 * config.wheelbase * math.sin(alpha + slip) / distance)
+    if config.feedforward and curvature is not None and len(curvature) == len(path) > 1:
+        correction = _feedforward_correction(
+            path, curvature, axle, lookahead=lookahead, speed=speed, config=config
+        )
+        arc = 2.0 * math.sin(alpha + slip) / distance if distance > 0.0 else 0.0
+        delta = math.atan(config.wheelbase * (arc + correction))
     steering = min(max(delta, -config.max_steer), config.max_steer)
     return SteeringResult(steering, target, index, alpha, distance, lookahead)
+
+
+def _feedforward_correction(
+    path: FloatArray,
+    curvature: FloatArray,
+    axle: FloatArray,
+    *,
+    lookahead: float,
+    speed: float,
+    config: PurePursuitConfig,
+) -> float:
+    """kappa_path(s_q + v tau) - 2 sin(alpha_0) / L_0 [1/m] (module docstring): the
+    path's curvature ahead of the axle's projection q less pure pursuit's arc
+    from q, heading along the path."""
+    seg = np.diff(path, axis=0)
+    length2 = np.maximum(np.einsum("ij,ij->i", seg, seg), 1e-12)
+    t = np.clip(np.einsum("ij,ij->i", axle - path[:-1], seg) / length2, 0.0, 1.0)
+    foot = path[:-1] + t[:, None] * seg
+    i = int(np.argmin(np.hypot(foot[:, 0] - axle[0], foot[:, 1] - axle[1])))
+    q = foot[i]
+    # The tangent at q, between its segment's ends' (second-order differences):
+    # the segment's own direction is the tangent at its middle only.
+    lo = min(max(i - 1, 0), max(len(path) - 3, 0))
+    near = path[lo : lo + 3]
+    ends = np.gradient(near, axis=0, edge_order=2 if len(near) == 3 else 1)[i - lo : i - lo + 2]
+    direction = (1.0 - t[i]) * ends[0] + t[i] * ends[-1]
+    heading = math.atan2(float(direction[1]), float(direction[0]))
+    rest = np.vstack([q, path[i + 1 :]])
+    target, _ = find_lookahead_point(rest, q, lookahead)
+    dx, dy = float(target[0] - q[0]), float(target[1] - q[1])
+    chord = math.hypot(dx, dy)
+    if chord <= 0.0:
+        return 0.0
+    alpha0 = math.atan2(dy, dx) - heading
+    s = np.concatenate([[0.0], np.cumsum(np.sqrt(length2))])
+    s_q = float(s[i] + t[i] * math.sqrt(float(length2[i])))
+    ahead = float(np.interp(s_q + abs(speed) * config.feedforward_preview, s, curvature))
+    return ahead - 2.0 * math.sin(alpha0) / chord

@@ -53,6 +53,10 @@ def test_a_cone_missed_in_one_scan_is_recalled_where_it_stands() -> None:
     order = np.argsort(np.hypot(expected[:, 0], expected[:, 1]))
     assert_allclose(third.points, expected[order], atol=1e-12)
     assert memory.recalled_count == 1
+    # Cone 2 is the third nearest: the one row marked as the memory's, not the scan's.
+    assert memory.recalled.tolist() == [False, False, True, False]
+    memory.recall(_scan(1.1, p1, [0, 1, 2, 3]), buffer, FRAME_REFERENCE, 1.1)
+    assert not memory.recalled.any()
 
 
 def test_a_ghost_seen_once_is_not_recalled() -> None:

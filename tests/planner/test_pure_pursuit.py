@@ -113,3 +113,51 @@ def test_bad_path_or_speed_is_refused() -> None:
     with pytest.raises(ValueError, match="must be finite"):
         pure_pursuit(path, math.nan, CONFIG)
     assert pure_pursuit(path, 8.0, CONFIG).steering == pytest.approx(0.0)
+
+
+FEEDFORWARD = PurePursuitConfig(slip_stiffness=math.inf, feedforward=True, feedforward_preview=0.1)
+
+
+def straight_into_circle(gap: float, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """From 1 m behind the rear axle, straight along x for ``gap`` [m] past it, then
+    a left circle of ``radius``: points every 1 cm and their curvature [1/m]."""
+    x0 = FEEDFORWARD.rear_axle_x
+    line = np.column_stack([np.arange(x0 - 1.0, x0 + gap, 0.01), np.zeros(round((gap + 1) / 0.01))])
+    a = np.arange(0.01 / radius, math.pi / 2, 0.01 / radius)
+    arc = np.column_stack([x0 + gap + radius * np.sin(a), radius * (1.0 - np.cos(a))])
+    kappa = np.concatenate([np.zeros(len(line)), np.full(len(arc), 1.0 / radius)])
+    return np.vstack([line, arc]), kappa
+
+
+def test_feedforward_does_not_turn_in_before_the_corner() -> None:
+    """On the path 3 m before a R 8 m corner at 10 m/s (L_d 6 m, preview 1 m): pure
+    pursuit's chord already bends left; the feed-forward steers straight."""
+    path, kappa = straight_into_circle(3.0, 8.0)
+    plain = pure_pursuit(path, 10.0, GEOMETRIC, curvature=kappa)
+    assert plain.steering > 0.04  # 0.049 rad: the chord to (5.5, 0.57) m
+    assert pure_pursuit(path, 10.0, FEEDFORWARD, curvature=kappa).steering == pytest.approx(
+        0.0, abs=1e-9
+    )
+    # 0.5 m before the corner the preview reaches it: the corner's own angle.
+    path, kappa = straight_into_circle(0.5, 8.0)
+    result = pure_pursuit(path, 10.0, FEEDFORWARD, curvature=kappa)
+    assert result.steering == pytest.approx(math.atan(FEEDFORWARD.wheelbase / 8.0), abs=1e-3)
+
+
+@pytest.mark.parametrize("radius", [6.0, 25.0])
+def test_feedforward_on_a_circle_is_the_circle(radius: float) -> None:
+    """On a circle through the axle both terms are the circle's: atan(L / R)."""
+    path = circle_through_axle(radius)
+    result = pure_pursuit(path, 8.0, FEEDFORWARD, curvature=np.full(len(path), 1.0 / radius))
+    assert result.steering == pytest.approx(math.atan(FEEDFORWARD.wheelbase / radius), abs=1e-6)
+
+
+def test_feedforward_off_a_straight_path_is_pure_pursuit() -> None:
+    """0.4 m right of a straight path: the on-path terms vanish, pure pursuit's correction stays."""
+    x = np.arange(-2.0, 20.0, 0.5)
+    path = np.column_stack([x, np.full_like(x, 0.4)])
+    plain = pure_pursuit(path, 8.0, GEOMETRIC).steering
+    assert plain > 0.0
+    assert pure_pursuit(path, 8.0, FEEDFORWARD, curvature=np.zeros(len(x))).steering == (
+        pytest.approx(plain, abs=1e-12)
+    )
