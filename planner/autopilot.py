@@ -341,17 +341,24 @@ class Autopilot:
             return
         c = self.config
         try:
+            m = c.midline
             path = self.lap_map.racing_path(
-                self.global_path, c.midline.body_half_width + c.racing_margin, c.speed_profile
-            )
+                self.global_path, m.body_half_width + c.racing_margin, c.speed_profile,
+                body=(m.body_half_width, m.body_front),
+            )  # fmt: skip
         except (ValueError, ArithmeticError) as exc:
             _log.warning("no racing line through the lap-1 map (%s); the midline stays", exc)
             self.lap_map = None
             return
         racing = GlobalSpeedPlan(path, c.speed_profile)
-        if self.global_speed is not None and lap_time(racing) >= lap_time(self.global_speed):
+        plan_s = lap_time(racing)
+        midline_s = math.inf if self.global_speed is None else lap_time(self.global_speed)
+        if plan_s >= midline_s:
             # A lane too narrow for the margin leaves no faster line than the midline.
-            _log.info("the racing line laps no faster than the midline; the midline stays")
+            _log.info(
+                "the racing line laps in %.2f s, the midline in %.2f s: the midline stays",
+                plan_s, midline_s,
+            )  # fmt: skip
             self.lap_map = None
             return
         self.racing = racing

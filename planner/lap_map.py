@@ -88,9 +88,16 @@ class LapMap:
         return a[:, :2] / a[:, 2:3], np.sign(a[:, 3])
 
     def racing_path(
-        self, global_path: GlobalPath, clearance: float, config: SpeedProfileConfig
+        self,
+        global_path: GlobalPath,
+        clearance: float,
+        config: SpeedProfileConfig,
+        *,
+        body: tuple[float, float] = (0.0, 0.0),
     ) -> GlobalPath:
-        """The fastest blend's line through the mapped lane (module docstring).
+        """The fastest blend's line through the mapped lane (module docstring);
+        ``body``: half the car's width and its front ahead of the rear axle [m]
+        (``Corridor.body_front``: the front corner's sweep outside a turn).
 
         Raises:
             ValueError: too few cones on a side, or no line fits (``RacingLineError``).
@@ -109,7 +116,7 @@ class LapMap:
             order = np.argsort(proj.station[keep])
             boundaries.append(Polyline(points[keep][order], True))
         centre = np.asarray(global_path.xy, dtype=float)
-        lines = racing_lines(Corridor(centre, boundaries[0], boundaries[1], clearance))
+        lines = racing_lines(Corridor(centre, boundaries[0], boundaries[1], clearance, *body))
         paths = [
             global_path_from_centreline(lines.line(b), True, global_path.origin) for b in BLENDS
         ]

@@ -74,7 +74,7 @@ import osqp
 from numpy.typing import NDArray
 from scipy import sparse
 from scipy.interpolate import splev, splprep
-from scipy.ndimage import minimum_filter1d, uniform_filter1d
+from scipy.ndimage import maximum_filter1d, minimum_filter1d, uniform_filter1d
 from scipy.spatial import cKDTree
 
 from conesim.core.polyline import Polyline
@@ -93,6 +93,7 @@ TOLERANCE_M = 0.002  # [m] the clearance the splines may lack
 # length, so ripples shorter than the cone spacing are smoothed away while a
 # corner's shape (tens of metres) is still the shortest path's.
 SHORTEST_SMOOTHING = 4.0
+SUBSTEPS = 10  # the bounds' distances are measured this many times a step
 SMOOTHING_M = 5.0  # [m] the bounds are smoothed over this much (FS cones are <= 5 m apart)
 _REGULARISATION = 1e-9  # [1/m^4] added to the QP's diagonal: a unique solution on straights
 
@@ -110,12 +111,21 @@ class Corridor:
         left: the left boundary, a closed polyline through its cones [m].
         right: the right boundary [m].
         clearance: the car's centre keeps this far from both [m].
+        body_half_width: half the car's width [m], for ``body_front``.
+        body_front: the car's front end ahead of the point on the line [m]
+            (the rear axle, which pure pursuit steers along it; 0: no sweep):
+            outside a turn of radius R the front corner runs
+            sqrt((R + w/2)^2 + f^2) - R - w/2 wider than the side at the
+            axle (``sweep``), and the line keeps that much more from the
+            outer boundary.
     """
 
     centre: FloatArray
     left: Polyline
     right: Polyline
     clearance: float
+    body_half_width: float = 0.0
+    body_front: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -227,12 +237,33 @@ def offset_bounds(
     ring = Polyline(reference, True)
     tangents = ring.tangents()
     normals = np.column_stack([-tangents[:, 1], tangents[:, 0]])
-    d_left = -corridor.left.project(reference).lateral
-    d_right = corridor.right.project(reference).lateral
+    # The distances are measured every 1 / SUBSTEPS of a step too: the nearest
+    # approach of a chord between cones falls between the points, and the
+    # running minimum of the points alone misses it by up to h^2 / 8 R (a few mm
+    # at 1 m, in a ripple a line pressed on the bound takes, and a speed plan
+    # reads: 2 mm at 3.5 m cost a R 15 m ring 1 % of its lap).
+    dense = _between(reference)
+    d_left = -corridor.left.project(dense).lateral
+    d_right = corridor.right.project(dense).lateral
     step = float(np.mean(ring.segment_lengths))
     window = max(1, 2 * round(0.5 * SMOOTHING_M / step) + 1)  # odd, about SMOOTHING_M
-    upper = _smooth_below(d_left - corridor.clearance, window)
-    lower = -_smooth_below(d_right - corridor.clearance, window)
+    sweep_left = sweep_right = 0.0
+    if corridor.body_front > 0.0:
+        # The tightest turn within the window either way (the body sweeps out of a
+        # right turn to the left, of a left turn to the right), smoothed: the
+        # reference is the last QP's line, and a bound that follows its
+        # curvature point by point puts that curvature's ripple back in.
+        kappa = ring.curvature()
+        for sign in (-1.0, 1.0):
+            tight = maximum_filter1d(np.maximum(sign * kappa, 0.0), window, mode="wrap")
+            smooth = uniform_filter1d(tight, window, mode="wrap")
+            out = np.repeat(sweep(smooth, corridor.body_half_width, corridor.body_front), SUBSTEPS)
+            if sign < 0.0:
+                sweep_left = out
+            else:
+                sweep_right = out
+    upper = _smooth_below(d_left - corridor.clearance - sweep_left, window)
+    lower = -_smooth_below(d_right - corridor.clearance - sweep_right, window)
     # Where they cross, the middle of the smoothed bounds: the middle of the
     # raw distances follows the chords between the cones, and a line held to
     # it zigzags (a 0.1 m ripple at the cones' 3 m spacing is a curvature of 0.4 1/m).
@@ -241,16 +272,41 @@ def offset_bounds(
     return normals, np.where(narrow, middle, lower), np.where(narrow, middle, upper)
 
 
-def _smooth_below(bound: FloatArray, window: int) -> FloatArray:
-    """A smooth cyclic function (n,) that is nowhere above ``bound`` (n,).
+def _between(reference: FloatArray) -> FloatArray:
+    """(n * SUBSTEPS, 2) the closed ``reference`` (n, 2) and ``SUBSTEPS`` - 1 points
+    between each two on the periodic cubic spline through it (the curve, not the
+    chords, which lie h^2 / 8 R inside it) [m]."""
+    pts = np.vstack([reference, reference[:1]])
+    tck, u = splprep(pts.T, s=0.0, per=1, k=3)
+    share = np.arange(SUBSTEPS) / SUBSTEPS
+    at = (u[:-1, None] + share[None, :] * np.diff(u)[:, None]).ravel()
+    return np.column_stack(splev(at, tck))
 
-    The running minimum over ``window`` points, then the running mean over as
-    many: each point's mean is of minima over windows that contain it, so it
-    is at most its own value (a morphological opening, smoothed).
+
+def sweep(kappa: FloatArray, half_width: float, front: float) -> FloatArray:
+    """How much wider than its side at the axle the front corner runs outside a turn of
+    curvature kappa >= 0 (n,) [1/m] at the axle: sqrt((R + w/2)^2 + f^2) - R - w/2,
+    R = 1 / kappa, written f^2 kappa / (sqrt((1 + w/2 kappa)^2 + (f kappa)^2) + 1 + w/2 kappa)
+    to hold at kappa = 0 [m]."""
+    k = np.asarray(kappa, dtype=float)
+    base = 1.0 + half_width * k
+    out: FloatArray = front * front * k / (np.hypot(base, front * k) + base)
+    return out
+
+
+def _smooth_below(bound: FloatArray, window: int) -> FloatArray:
+    """A smooth cyclic function (n,) at the points that is nowhere above ``bound``
+    (n * SUBSTEPS,), given at the points and ``SUBSTEPS`` - 1 between each two.
+
+    The running minimum over ``window`` points (all the samples they span), then
+    the running mean over as many points: each point's mean is of minima over
+    windows that contain it, so it is at most its own value (a morphological
+    opening, smoothed).
     """
-    low = minimum_filter1d(bound, window, mode="wrap")
+    half = (window // 2) * SUBSTEPS
+    low = minimum_filter1d(bound, 2 * half + 1, mode="wrap")[::SUBSTEPS]
     smooth: FloatArray = uniform_filter1d(low, window, mode="wrap")
-    return np.minimum(smooth, bound)  # the mean's rounding
+    return np.minimum(smooth, bound[::SUBSTEPS])  # the mean's rounding
 
 
 def min_curvature_offsets(

@@ -14,6 +14,7 @@ from conesim.planner.racing_line import (
     offset_bounds,
     racing_lines,
     shortest_path_offsets,
+    sweep,
 )
 from conesim.tracks import load_track
 
@@ -107,3 +108,25 @@ def test_a_lane_too_narrow_for_the_clearance_gives_a_smooth_line() -> None:
     corridor = Corridor(ring(radius, 400), Polyline(inner, True), Polyline(outer, True), 1.5)
     line = Polyline(racing_lines(corridor).line(0.5), True)
     assert_allclose(line.curvature(), 1.0 / np.mean(np.hypot(*line.points.T)), atol=0.01)
+
+
+def test_the_front_corner_sweeps_out_of_a_turn() -> None:
+    """Rear axle on 3.0 m at full lock, half width 0.7 m, front 2.28 m ahead of the
+    axle: the front corner runs on sqrt(3.7^2 + 2.28^2) = 4.346 m, 0.646 m wider
+    than the side at the axle; nothing on a straight."""
+    assert_allclose(sweep(np.array([1.0 / 3.0, 0.0]), 0.7, 2.28), [math.hypot(3.7, 2.28) - 3.7, 0])
+    assert sweep(np.array([1.0 / 3.0]), 0.7, 2.28)[0] == pytest.approx(0.646, abs=1e-3)
+
+
+def test_the_line_keeps_the_sweep_from_the_outer_boundary() -> None:
+    """A R 20 m ring 5 m wide: the outermost circle the car's centre may drive is
+    21.55 m; with the body's 2.28 m front it keeps sqrt((r + 0.7)^2 + 2.28^2) - r - 0.7
+    (0.117 m) more from the outer cones, and the inner bound is as before."""
+    radius, width = 20.0, 5.0
+    corridor = ring_corridor(radius, width)
+    body = Corridor(corridor.centre, corridor.left, corridor.right, CLEARANCE, 0.7, 2.28)
+    lines = racing_lines(body)
+    r = float(np.mean(np.hypot(*lines.line(0.0).T)))
+    expected = radius + width / 2 - CLEARANCE - (math.hypot(r + 0.7, 2.28) - r - 0.7)
+    assert_allclose(np.hypot(*lines.line(0.0).T), expected, atol=5e-3)
+    assert_allclose(np.hypot(*lines.line(1.0).T), radius - (width / 2 - CLEARANCE), atol=5e-3)
