@@ -126,7 +126,7 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
-from conesim.core.geodesy import GeodesyError
+from conesim.core.geodesy import GeodesyError, local_cartesian_to_gps
 from conesim.core.pose import Pose2D
 from conesim.envs.config import RANDOM_TRACK, EnvConfig
 from conesim.envs.loop import Broadcast, ClosedLoop, EndReason, StepRecord, world_seed
@@ -185,6 +185,9 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         first = self._generated(0) if cfg.track == RANDOM_TRACK else cfg.track
         self.track_seed = _generator_seed(first)
         self.loop = self._build_loop(first, cfg.sensors, cfg.localization)
+        # What the loop was built for: an episode with the same track, sensors
+        # and localization resets it (and its world) rather than building another.
+        self._loop_key: tuple[object, ...] | None = (first, cfg.sensors, cfg.localization)
         p = self.loop.world_config.vehicle
         if cfg.action == "centred":
             self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
@@ -236,26 +239,41 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
         rng, rng_seed = self._np_random, self._np_random_seed
         rng_state = None if rng is None else rng.bit_generator.state
         super().reset(seed=seed)
+        begun = False  # whether the current episode's loop began a reset (the episode is gone)
         try:
             track = chosen.track
             if track == RANDOM_TRACK:
                 track = self._generated(int(self.np_random.integers(len(cfg.track_seeds))))
-            loop = self._build_loop(track, chosen.sensors, chosen.localization)
+            key = (track, chosen.sensors, chosen.localization)
+            if key == self._loop_key:
+                loop = self.loop
+            else:
+                loop = self._build_loop(track, chosen.sensors, chosen.localization)
+            # The loop's episode, if it has one, is gone once its reset begins:
+            # a bad start is refused before.
+            checked = False
+            if loop.record is not None and start_pose is not None:
+                origin = loop.world_config.origin
+                local_cartesian_to_gps(start_pose.x, start_pose.y, origin)
+                _refuse_off_track(loop, start_pose, options["start_pose"])
+                checked = True
+            begun = loop is self.loop and loop.record is not None
             record = loop.reset(world_seed(self.np_random), start_pose)
-            if start_pose is not None and loop.world.race.is_off_track_at(start_pose):
-                raise ValueError(
-                    f"reset option start_pose {options['start_pose']!r} puts the car off the "
-                    f"track {loop.track.name!r}"
-                )
+            if start_pose is not None and not checked:
+                _refuse_off_track(loop, start_pose, options["start_pose"])
         except Exception as exc:
             self._np_random, self._np_random_seed = rng, rng_seed
             if rng is not None and rng_state is not None:
                 rng.bit_generator.state = rng_state
+            if begun:  # the last episode is gone: the next reset builds a loop
+                self._record = None
+                self._loop_key = None
             if isinstance(exc, GeodesyError) and start_pose is not None:
                 pose = options["start_pose"]
                 raise ValueError(f"reset option start_pose {pose!r}: {exc}") from None
             raise
         self.loop = loop
+        self._loop_key = key
         self.track_seed = _generator_seed(track)
         self._command = (0.0, 0.0)
         self._memory = SensorMemory()
@@ -512,6 +530,14 @@ class ConeTrackEnv(gym.Env[ObsType, NDArray[np.float32]]):
 def _generator_seed(track: TrackSource) -> int:
     """A generated track's seed, -1 for any other track (``info["track_seed"]``)."""
     return track.seed if isinstance(track, GeneratedTrack) else -1
+
+
+def _refuse_off_track(loop: ClosedLoop, start_pose: Pose2D, option: object) -> None:
+    """Raise if ``start_pose`` (the ``start_pose`` option ``option``) is off the loop's track."""
+    if loop.world.race.is_off_track_at(start_pose):
+        raise ValueError(
+            f"reset option start_pose {option!r} puts the car off the track {loop.track.name!r}"
+        )
 
 
 def _start_pose_option(value: Any) -> Pose2D | None:

@@ -326,6 +326,7 @@ class ClosedLoop:
             )
             self.cone_update = ConeUpdate(landmarks, self.cone_config)
         self._driver_factory = driver
+        self._world: World | None = None
         self.driver: Driver | None = None
         self.record: StepRecord | None = None
         self._cones: FloatArray = np.zeros((0, 2))
@@ -343,6 +344,9 @@ class ClosedLoop:
     def reset(self, seed: int = 0, start_pose: Pose2D | None = None) -> StepRecord:
         """A new episode at t = 0: the world, a fresh filter and frame tree, the driver.
 
+        The first reset builds the world; the later ones reset it
+        (``World.reset``: the same episode as a new world's, a fraction of the cost).
+
         Args:
             seed: the world's seed (every random stream derives from it).
             start_pose: the CG's pose to start from; default the track's start.
@@ -351,7 +355,13 @@ class ClosedLoop:
             The t = 0 record: the first captures, the first broadcast, the
             driver's first command.
         """
-        self.world = world = World(self.track, self.world_config, seed, start_pose)
+        world = self._world
+        if world is None:  # the first episode builds the world; later ones reset it
+            self._world = world = World(self.track, self.world_config, seed, start_pose)
+            first = world.initial_messages
+        else:  # the same episode as a new world's, bit for bit (World.reset)
+            first = world.reset(seed, start_pose)
+        self.world = world
         slam = None
         if self.localization == "slam":
             slam = SlamUpdate(self.cone_config, self.slam_config, start=world.antenna_pose)
@@ -359,7 +369,6 @@ class ClosedLoop:
             self.localization, self.ekf_config, self.world_config.origin,
             cones=self.cone_update, slam=slam,
         )  # fmt: skip
-        first = world.initial_messages
         sent = self.localizer.step(0.0, first, world.antenna_pose)
         factory = self._driver_factory
         self.driver = (

@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 
+from conesim.sim.bodies import remove_from_space, spend_bias
 from conesim.sim.vehicle import VEHICLE_COLLISION_TYPE
 
 COLLISION_CAR = VEHICLE_COLLISION_TYPE
@@ -124,7 +125,7 @@ class ConeField:
                 f"ConeField: {len(self.kinds)} kinds for {len(self.initial_positions)} cones"
             )
         self.bodies: list[pymunk.Body] = []
-        self._space = space
+        self._shapes: list[pymunk.Poly] = []
         velocity_func = _ground_friction(self.params.mu_ground)
         for i, (xy, kind) in enumerate(zip(self.initial_positions, self.kinds, strict=True)):
             big = kind == "big_orange"
@@ -138,22 +139,54 @@ class ConeField:
             shape.elasticity = self.params.elasticity
             shape.friction = self.params.friction
             shape.cone_id = i
-            space.add(body, shape)
             self.bodies.append(body)
+            self._shapes.append(shape)
         self.base_widths = np.array(
             [self.params.big_base if k == "big_orange" else self.params.small_base for k in kinds]
         )
+        # Plain-float copies for the per-step bookkeeping (the arrays are the
+        # public views; both always hold the same values).
+        self._initial_list = [(float(x), float(y)) for x, y in self.initial_positions]
+        self._base_widths_list = [float(w) for w in self.base_widths]
+        self._join(space)
+
+    def renew(self, space: pymunk.Space) -> None:
+        """Move the cones into ``space`` (a new episode's), each back on its mark at rest.
+
+        The field is then as a new ``ConeField(space, positions, kinds, params)``
+        is, bit for bit, bookkeeping included, on the same bodies (``sim.bodies``:
+        building them is most of a world's reset). A cone that no contact
+        touched since the field joined its last space has not moved (only
+        contacts move a cone, and each contact starts with a call of a begin
+        handler here); the others get their pose, velocities, force and torque
+        set again and the solver's bias cleared.
+        """
+        remove_from_space(self.bodies)
+        moved = [self.bodies[i] for i in sorted(self._touched)]
+        spend_bias(moved)
+        for i in sorted(self._touched):
+            body = self.bodies[i]
+            body.angle = 0.0
+            body.position = self._initial_list[i]
+            body.velocity = (0.0, 0.0)
+            body.angular_velocity = 0.0
+            body.force = (0.0, 0.0)
+            body.torque = 0.0
+        self._join(space)
+
+    def _join(self, space: pymunk.Space) -> None:
+        """Add the cones, as they stand, to ``space``; start the bookkeeping afresh."""
+        for body, shape in zip(self.bodies, self._shapes, strict=True):
+            space.add(body, shape)
+        self._space = space
         self.hit_ids: set[int] = set()
         self.doo_ids: set[int] = set()
         self.hit_events: list[tuple[float, int]] = []
         self.doo_events: list[tuple[float, int]] = []
         self._watch: set[int] = set()
+        self._touched: set[int] = set()  # every cone in a contact since joining this space
         self._positions = self.initial_positions.copy()
-        # Plain-float copies for the per-step bookkeeping (the array is the
-        # public view; both always hold the same values).
-        self._positions_list = [(float(x), float(y)) for x, y in self._positions]
-        self._initial_list = list(self._positions_list)
-        self._base_widths_list = [float(w) for w in self.base_widths]
+        self._positions_list = list(self._initial_list)
         self.version = 0  # bumped whenever a cone's position changes
         self.time = 0.0
         space.on_collision(COLLISION_CAR, COLLISION_CONE, begin=self._on_car_contact)
@@ -207,6 +240,7 @@ class ConeField:
             cone_id = getattr(shape, "cone_id", None)
             if cone_id is not None:
                 self._watch.add(cone_id)
+                self._touched.add(cone_id)
                 if cone_id not in self.hit_ids:
                     self.hit_ids.add(cone_id)
                     self.hit_events.append((self.time, cone_id))
@@ -217,6 +251,7 @@ class ConeField:
             cone_id = getattr(shape, "cone_id", None)
             if cone_id is not None:
                 self._watch.add(cone_id)
+                self._touched.add(cone_id)
 
     def update(self, t: float) -> list[int]:
         """Bookkeeping after a physics step: positions, new DOO cones.

@@ -190,7 +190,14 @@ class RaceControl:
         self._searched_at: tuple[float, float] | None = None  # the last off-track search
 
     def start(self, t: float, pose: Pose2D) -> None:
-        """Initialise at the start pose; starts the clock if already past the line."""
+        """Initialise at the start pose; starts the clock if already past the line.
+
+        A new race each time: laps, progress, excursions and the stuck
+        window start afresh (a world's reset starts its race control again).
+        """
+        self.state = RaceState()
+        self._progress_at_crossing = 0.0
+        self.progress.reset()
         proj = self.progress.project(pose.xy)
         self._s_last = float(proj.station[0])
         self._history = deque([(t, 0.0)])

@@ -40,11 +40,14 @@ from dataclasses import dataclass
 import pymunk
 
 from conesim.core.pose import Pose2D
+from conesim.sim.bodies import remove_from_space, spend_bias
 from conesim.sim.vehicle_dynamics import packed, wrench
 from conesim.sim.vehicle_params import VehicleParams
 
 #: pymunk collision type of the car's footprint.
 VEHICLE_COLLISION_TYPE = 1
+
+_ORIGIN = Pose2D(0.0, 0.0, 0.0)  # a new pymunk body's pose
 
 # (x, y, yaw, vx, vy, yaw_rate, ax, ay, yaw_accel): ``VehicleState``'s motion as floats.
 Kinematics = tuple[float, float, float, float, float, float, float, float, float]
@@ -158,11 +161,7 @@ class Vehicle:
     def __init__(
         self, space: pymunk.Space, params: VehicleParams, pose: Pose2D, speed: float = 0.0
     ) -> None:
-        if tuple(space.gravity) != (0.0, 0.0) or space.damping != 1.0:
-            raise ValueError(
-                "Vehicle needs a space with gravity (0, 0) and damping 1.0, got "
-                f"gravity {tuple(space.gravity)} and damping {space.damping}"
-            )
+        _check_space(space)
         self.params = params
         self._packed = packed(params)  # the car model's parameters, as its kernels read them
         self._body = pymunk.Body(params.mass, params.yaw_inertia)
@@ -197,13 +196,35 @@ class Vehicle:
         """The held command after clipping: (steer [rad], accel [m/s^2])."""
         return self._steer_cmd, self._accel_cmd
 
+    def renew(self, space: pymunk.Space, pose: Pose2D, speed: float = 0.0) -> None:
+        """Move the car into ``space`` (a new episode's) and :meth:`reset` it there.
+
+        The car is then as a new ``Vehicle(space, params, pose, speed)`` is, bit
+        for bit, on the same body and footprint (``sim.bodies``: a new body is
+        what a world's reset spends its time on).
+
+        Raises:
+            ValueError: if the space has gravity or damping.
+        """
+        _check_space(space)
+        remove_from_space([self._body])
+        spend_bias([self._body])
+        # Where a new body stands: Chipmunk indexes a shape where its body is
+        # when it joins a space, and the index's layout shapes later steps.
+        self.reset(_ORIGIN)
+        space.add(self._body, self._shape)
+        self.reset(pose, speed)
+
     def reset(self, pose: Pose2D, speed: float = 0.0) -> None:
-        """Place the CG at pose with speed [m/s] along the heading, wheels straight."""
+        """Place the CG at pose with speed [m/s] along the heading, wheels straight,
+        no force or torque held."""
         b = self._body
         b.position = (pose.x, pose.y)
         b.angle = pose.yaw
         b.velocity = (speed * math.cos(pose.yaw), speed * math.sin(pose.yaw))
         b.angular_velocity = 0.0
+        b.force = (0.0, 0.0)
+        b.torque = 0.0
         self._steering.angle = 0.0
         self._steer_cmd = 0.0
         self._accel_cmd = 0.0
@@ -346,6 +367,15 @@ class Vehicle:
     def antenna_pose(self) -> Pose2D:
         """Pose of the GPS antenna in the reference frame."""
         return self.state.antenna_pose()
+
+
+def _check_space(space: pymunk.Space) -> None:
+    """Refuse a space with gravity or damping (the car knows no ground in 2D)."""
+    if tuple(space.gravity) != (0.0, 0.0) or space.damping != 1.0:
+        raise ValueError(
+            "Vehicle needs a space with gravity (0, 0) and damping 1.0, got "
+            f"gravity {tuple(space.gravity)} and damping {space.damping}"
+        )
 
 
 def step(space: pymunk.Space, vehicle: Vehicle, dt: float) -> VehicleState:

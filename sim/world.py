@@ -106,6 +106,10 @@ class World:
             constructor's reset (``reset`` returns them too).
     """
 
+    vehicle: Vehicle
+    cones: ConeField
+    race: RaceControl
+
     def __init__(
         self,
         track: Track,
@@ -115,10 +119,19 @@ class World:
     ) -> None:
         self.track = track
         self.config = config or WorldConfig()
+        self._built = False  # the car, the cones and race control: built by the first reset
         self.initial_messages = self.reset(seed, start_pose)
 
     def reset(self, seed: int = 0, start_pose: Pose2D | None = None) -> list[Message]:
-        """Rebuild the world at ``t = 0`` for a new episode.
+        """Start the world again at ``t = 0`` for a new episode.
+
+        The first reset (the constructor's) builds the car, the cones and
+        race control; a later one puts the same car and cone bodies into a
+        new pymunk space, each cone back on its mark, and starts race control
+        again (``Vehicle.renew``, ``ConeField.renew``, ``RaceControl.start``).
+        The episode is the one a new ``World(track, config, seed,
+        start_pose)`` runs, bit for bit; building some 200 pymunk bodies was
+        most of the cost of a reset.
 
         Returns:
             The measurements delivered at ``t = 0`` (latency-free captures).
@@ -134,11 +147,16 @@ class World:
         self.space.sleep_time_threshold = SLEEP_TIME_THRESHOLD
         self.space.idle_speed_threshold = IDLE_SPEED_THRESHOLD
         pose = start_pose or track.start_pose
-        self.vehicle = Vehicle(self.space, cfg.vehicle, pose)
-        self.cones = ConeField(
-            self.space, track.cones, tuple(str(k) for k in track.kinds), cfg.cones
-        )
-        self.cone_map = ConeMap(track.cones, tuple(str(k) for k in track.kinds))
+        kinds = tuple(str(k) for k in track.kinds)
+        if self._built:
+            self.vehicle.renew(self.space, pose)
+            self.cones.renew(self.space)
+        else:
+            self.vehicle = Vehicle(self.space, cfg.vehicle, pose)
+            self.cones = ConeField(self.space, track.cones, kinds, cfg.cones)
+            self.race = self._race_control()
+            self._built = True
+        self.cone_map = ConeMap(track.cones, kinds)
         self._cone_version = self.cones.version
         self._cone_positions = self.cones.positions  # a read-only view, current at every step
         self._cone_kinds = self.cones.kinds
@@ -153,8 +171,20 @@ class World:
         )
         self.space.step(1e-9)  # let pymunk register the bodies before they sleep
         self.cones.sleep_all()
+        self._state: VehicleState | None = None  # built when asked for
+        self._pose: Pose2D | None = None  # likewise
+        self._lever = (cfg.vehicle.antenna_x, cfg.vehicle.antenna_y)
+        self._refresh()
+        self._accel_prev = (0.0, 0.0)  # antenna acceleration of the last step, world [m/s^2]
+        self.race.start(0.0, self.pose)
+        self.sensors = SensorSuite(cfg.sensor_profile, seed=self.seed, origin=cfg.origin)
+        return self.sensors.step(self._truth())
+
+    def _race_control(self) -> RaceControl:
+        """Race control on the track, for the car and the rules of the config."""
+        track, cfg = self.track, self.config
         closed = track.layout == "closed"
-        self.race = RaceControl(
+        return RaceControl(
             track.centreline,
             closed,
             half_widths=0.5 * np.asarray(track.widths),
@@ -167,14 +197,6 @@ class World:
             car_width=cfg.vehicle.width,
             rules=cfg.rules,
         )
-        self._state: VehicleState | None = None  # built when asked for
-        self._pose: Pose2D | None = None  # likewise
-        self._lever = (cfg.vehicle.antenna_x, cfg.vehicle.antenna_y)
-        self._refresh()
-        self._accel_prev = (0.0, 0.0)  # antenna acceleration of the last step, world [m/s^2]
-        self.race.start(0.0, self.pose)
-        self.sensors = SensorSuite(cfg.sensor_profile, seed=self.seed, origin=cfg.origin)
-        return self.sensors.step(self._truth())
 
     @property
     def dt(self) -> float:

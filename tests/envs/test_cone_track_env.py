@@ -469,3 +469,35 @@ def test_a_refused_reset_leaves_the_random_generator_as_it_was() -> None:
         env.reset(seed=5, options={"start_pose": (0.0, 1.0e8, 0.0)})  # beyond the pole
     again, _ = env.reset()
     assert np.array_equal(again, expected)
+
+
+def test_resets_on_one_track_reuse_its_world_and_another_track_gets_a_new_one() -> None:
+    """Resets with the env's track reset its world (the same object) and give
+    a new env's episodes; a reset to another track builds a new world, and
+    one back to the env's track another."""
+    env = ConeTrackEnv(sensors="ideal", localization="truth", info="full")
+    actions = [np.array([0.3 * math.sin(k / 20), 1.0], dtype=np.float32) for k in range(120)]
+
+    def run(e: ConeTrackEnv, seed: int, options: dict[str, object] | None = None) -> list[object]:
+        obs, info = e.reset(seed=seed, options=options)
+        out: list[object] = [obs.tobytes(), repr(info["truth"])]
+        for action in actions:
+            obs, reward, terminated, truncated, info = e.step(action)
+            out += [obs.tobytes(), reward, terminated, truncated, repr(info["truth"])]
+        return out
+
+    run(env, 0)
+    world = env.loop.world
+    start = {"start_pose": (float(world.track.start_pose.x) + 3.0, 0.2, 0.05)}
+    for seed, options in [(1, None), (2, start), (3, None)]:
+        got = run(env, seed, options)
+        assert env.loop.world is world
+        assert got == run(ConeTrackEnv(sensors="ideal", localization="truth", info="full"),
+                          seed, options)  # fmt: skip
+    run(env, 4, {"track": "skidpad"})
+    assert env.loop.world is not world and env.loop.track.name == "skidpad"
+    skidpad = env.loop.world
+    got = run(env, 5)
+    assert env.loop.world is not world and env.loop.world is not skidpad
+    assert env.loop.track.name == "trackdrive"
+    assert got == run(ConeTrackEnv(sensors="ideal", localization="truth", info="full"), 5)

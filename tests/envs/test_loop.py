@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 
 import numpy as np
@@ -166,3 +167,36 @@ def test_bad_settings_and_order() -> None:
         EpisodeRules(laps=0)
     with pytest.raises(RuntimeError, match="before reset"):
         ClosedLoop(track).step()
+
+
+def exact(message: object) -> tuple[object, ...]:
+    """A message's fields, arrays as bytes: for comparison bit for bit."""
+    values = dataclasses.astuple(message)  # type: ignore[call-overload]
+    return tuple(v.tobytes() if isinstance(v, np.ndarray) else v for v in values)
+
+
+def test_a_reset_loop_runs_a_new_loops_episode_on_the_same_world() -> None:
+    """Resets of one loop with other seeds and starts, after episodes that
+    knocked cones: the same world object, and each episode's records are a
+    new loop's, bit for bit."""
+    track = load_track("acceleration")
+    left = track.left_boundary
+    rules = EpisodeRules(end_on_off_track=False)
+
+    def run(loop: ClosedLoop, seed: int, start: Pose2D | None) -> list[object]:
+        records = [loop.reset(seed=seed, start_pose=start)]
+        records += [loop.step(ControlCommand(0.0, 0.02, 4.0)) for _ in range(120)]
+        return [(r.t, [exact(m) for m in r.messages], r.events, r.truth.state,
+                 r.truth.cones.tobytes(), r.truth.race, r.command, r.end)
+                for r in records]  # fmt: skip
+
+    loop = ClosedLoop(track, WorldConfig(sensors="rtk"), localization="fused", rules=rules)
+    starts = [Pose2D(float(left[k, 0]) - 3.0, float(left[k, 1]) - 0.2, 0.0) for k in (0, 2)]
+    world = None
+    for seed, start in [(1, starts[0]), (2, None), (3, starts[1]), (1, starts[0])]:
+        got = run(loop, seed, start)
+        assert world is None or loop.world is world
+        world = loop.world
+        new = ClosedLoop(track, WorldConfig(sensors="rtk"), localization="fused", rules=rules)
+        assert got == run(new, seed, start)
+    assert loop.world.cones.hit_ids  # the last episode knocked cones

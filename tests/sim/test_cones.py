@@ -166,3 +166,33 @@ def test_a_start_on_a_cone_steps_without_corrupting_pymunk() -> None:
         field.update(t)
     assert field.hit_ids == {0}  # cone 1 touched cone 0 only
     assert field.awake_count == 0  # all idle again, asleep as Chipmunk grouped them
+
+
+def test_renew_runs_as_a_new_field_after_an_overlap_was_pushed_apart() -> None:
+    """Two overlapping cones (the solver pushes them apart with bias
+    velocities pymunk cannot reset), renewed into a new space after a few
+    steps: the same run as a new field's, bit for bit, bookkeeping cleared."""
+    xy = np.array([[0.0, 0.0], [0.05, 0.01], [3.0, 0.0]])
+    kinds = ("blue", "blue", "yellow")
+
+    def run(field: ConeField, space: pymunk.Space, steps: int) -> list[tuple[float, ...]]:
+        out = []
+        for k in range(steps):
+            space.step(DT)
+            field.update((k + 1) * DT)
+            out += [(*b.position, b.angle, *b.velocity, b.angular_velocity) for b in field.bodies]
+        return out
+
+    space = make_space()
+    want = run(ConeField(space, xy, kinds), space, 40)
+    space = make_space()
+    field = ConeField(space, xy, kinds)
+    run(field, space, 7)
+    assert field.version > 0
+    bodies = list(field.bodies)
+    new = make_space()
+    field.renew(new)
+    assert field.bodies == bodies and not space.bodies
+    assert field.version == 0 and not field.hit_ids and not field.doo_events
+    assert field.positions.tobytes() == xy.tobytes()
+    assert run(field, new, 40) == want
