@@ -52,6 +52,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from conesim.core.compiled import parallel_warm_up
 from conesim.core.messages import (
@@ -223,6 +224,9 @@ class Autopilot:
         self.travelled = 0.0  # [m] along the global path, while lap 1 maps
         self._racing_station: float | None = None
         self._racing_projector: PathProjector | None = None
+        self._map_tree: cKDTree | None = None  # the lap map's cones, once racing
+        self._racing_on_map = True
+        self.racing_off_map_count = 0  # scans steered by the midline: the pose off the map
         self._last_control: float | None = None
 
     # -- intermediates -----------------------------------------------------------------------
@@ -312,7 +316,9 @@ class Autopilot:
             return None
         self._map_lap(classified)
         speeds = plan.speeds
-        racing = self._racing_segment() if self.racing is not None else None
+        racing = None
+        if self.racing is not None and self._on_map(classified):
+            racing = self._racing_segment()
         if racing is not None:
             path_reference, speeds, curvature = racing
         self.path_curvature = curvature  # set with the plan it belongs to
@@ -363,6 +369,26 @@ class Autopilot:
             return
         self.racing = racing
         self._racing_projector = PathProjector(path.polyline)
+        self._map_tree = cKDTree(self.lap_map.cones()[0])
+
+    def _on_map(self, classified: ClassifiedCones) -> bool:
+        """Whether the scan's own cones, placed by the pose, stand where the lap map
+        has them: the median distance of those within 1 m of a map cone at most
+        ``racing_map_tolerance``. The racing line is followed by the pose alone;
+        a pose off by more than the margin (a consumer receiver's drift, a lost
+        fix) would follow it into the cones, and the cones' midline steers
+        instead (``racing_off_map_count``). With fewer than 3 cones matched the
+        last scan's answer stands."""
+        assert self._map_tree is not None
+        own = ~self.memory.recalled[classified.index]
+        points = classified.points[own]
+        if len(points) >= 3:
+            d = self._map_tree.query(points, distance_upper_bound=1.0)[0]
+            d = d[np.isfinite(d)]
+            if len(d) >= 3:
+                self._racing_on_map = bool(np.median(d) <= self.config.racing_map_tolerance)
+        self.racing_off_map_count += not self._racing_on_map
+        return self._racing_on_map
 
     def _racing_segment(self) -> tuple[FloatArray, FloatArray, FloatArray] | None:
         """The racing line from 3 m behind the sensor to the planner's range ahead,

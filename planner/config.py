@@ -656,6 +656,9 @@ class AutopilotConfig(Settings):
             95 %, so it is off by default.
         racing_margin: the racing line keeps the car's centre
             ``midline.body_half_width`` plus this from the mapped boundaries [m].
+        racing_map_tolerance: the racing line steers only while the scan's
+            cones, placed by the pose, stand within this (their median) of
+            the lap map's; else the cones' midline does [m].
         global_path_min_scatter: a global path whose points scatter more
             than this about a smooth curve is smoothed before use
             (``planner.global_fit``: a surveyed path's error would read as
@@ -679,6 +682,7 @@ class AutopilotConfig(Settings):
     lane_check_margin: float = 0.0  # [m]
     racing_line: bool = False
     racing_margin: float = 0.8  # [m]
+    racing_map_tolerance: float = 0.2  # [m] rtk: 0.02-0.07; consumer GPS: 0.5-2
     global_path_min_scatter: float = 0.05  # [m] exact paths: 0.01-0.02 m
     speed_window: float = 0.1  # [s]
     reference_frame: str = FRAME_REFERENCE
@@ -712,6 +716,7 @@ class AutopilotConfig(Settings):
         _check("AutopilotConfig", "pursue_global_max_gap", self.pursue_global_max_gap, 0.0)
         _check("AutopilotConfig", "lane_check_margin", self.lane_check_margin, -math.inf)
         _check("AutopilotConfig", "racing_margin", self.racing_margin, 0.0, 2.0)
+        _check("AutopilotConfig", "racing_map_tolerance", self.racing_map_tolerance, 0.0)
         if self.speed_source not in ("local", "global"):
             raise ValueError(
                 f"AutopilotConfig.speed_source = {self.speed_source!r}: allowed 'local', 'global'"

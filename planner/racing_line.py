@@ -247,21 +247,19 @@ def offset_bounds(
     d_right = corridor.right.project(dense).lateral
     step = float(np.mean(ring.segment_lengths))
     window = max(1, 2 * round(0.5 * SMOOTHING_M / step) + 1)  # odd, about SMOOTHING_M
-    sweep_left = sweep_right = 0.0
+    sweeps = [np.zeros(len(dense)), np.zeros(len(dense))]  # [to the left, to the right]
     if corridor.body_front > 0.0:
         # The tightest turn within the window either way (the body sweeps out of a
         # right turn to the left, of a left turn to the right), smoothed: the
         # reference is the last QP's line, and a bound that follows its
         # curvature point by point puts that curvature's ripple back in.
         kappa = ring.curvature()
-        for sign in (-1.0, 1.0):
+        for side, sign in enumerate((-1.0, 1.0)):
             tight = maximum_filter1d(np.maximum(sign * kappa, 0.0), window, mode="wrap")
             smooth = uniform_filter1d(tight, window, mode="wrap")
-            out = np.repeat(sweep(smooth, corridor.body_half_width, corridor.body_front), SUBSTEPS)
-            if sign < 0.0:
-                sweep_left = out
-            else:
-                sweep_right = out
+            body = sweep(smooth, corridor.body_half_width, corridor.body_front)
+            sweeps[side] = np.repeat(body, SUBSTEPS)
+    sweep_left, sweep_right = sweeps
     upper = _smooth_below(d_left - corridor.clearance - sweep_left, window)
     lower = -_smooth_below(d_right - corridor.clearance - sweep_right, window)
     # Where they cross, the middle of the smoothed bounds: the middle of the

@@ -53,9 +53,15 @@ class Bicycle:
 
 
 def drive(
-    synth: ModuleType, track, seconds: float, config: AutopilotConfig | None = None
+    synth: ModuleType,
+    track,
+    seconds: float,
+    config: AutopilotConfig | None = None,
+    pose_error: tuple[float, float, float] | None = None,
 ) -> tuple[Autopilot, list[ControlCommand], list]:
-    """Run the closed loop on ``track`` from its first centreline point at rest."""
+    """Run the closed loop on ``track`` from its first centreline point at rest;
+    from ``pose_error``'s time t [s] on, the pose broadcast is ``pose_error``'s
+    (dx, dy) [m] off the car's."""
     start = synth.pose_on(track, 0)
     car = Bicycle(
         start.x - AXLE_TO_ANTENNA * math.cos(start.yaw),
@@ -72,7 +78,10 @@ def drive(
     for k in range(round(seconds * 100)):
         t = k * 0.01
         if k % 5 == 0:
-            synth.set_pose(buffer, car.antenna, t)
+            pose = car.antenna
+            if pose_error is not None and t >= pose_error[0]:
+                pose = Pose2D(pose.x + pose_error[1], pose.y + pose_error[2], pose.yaw)
+            synth.set_pose(buffer, pose, t)
         if k % 10 == 0:
             pending.append((t + 0.1, synth.detect(cones, car.antenna, t, max_range=20.0)))
         if k % 2 == 0:
@@ -104,6 +113,24 @@ def test_after_lap_one_the_car_races_the_inner_circle(synth: ModuleType) -> None
     assert np.max(np.abs(radius[: lap_one // 2] - 15.0)) < 0.3  # lap 1: the midline
     late = radius[-300:]  # the last 3 s
     assert late.min() > 14.5 and late.max() < 14.8  # the antenna, ahead of the axle
+
+
+def test_a_pose_off_the_lap_map_hands_the_steering_back_to_the_cones(
+    synth: ModuleType,
+) -> None:
+    """As above, but from 12 s (racing since about 9 s) the pose is 0.6 m off, as a
+    drifting receiver's would be: the scan's cones no longer stand on the lap map's,
+    and the cones' midline steers (planned in the sensor's frame, it needs no
+    pose): the car is back on R 15 m. Followed by the pose, the inner circle
+    would have put it 0.6 m inward of R 14.6 m, 0.4 m from the inner cones' side."""
+    racing = AutopilotConfig.from_dict(
+        {"pure_pursuit": {"slip_stiffness": math.inf}, "racing_line": True, "racing_margin": 0.4}
+    )
+    track = synth.circle_track(spacing=3.5)
+    autopilot, _, trace = drive(synth, track, 18.0, racing, pose_error=(12.0, 0.6, 0.0))
+    assert autopilot.racing is not None and autopilot.racing_off_map_count > 0
+    late = np.array([math.hypot(p.x, p.y) for _, p, _ in trace[-300:]])  # the last 3 s
+    assert np.max(np.abs(late - 15.0)) < 0.3
 
 
 def test_closed_loop_on_a_circle(synth: ModuleType, circle) -> None:
