@@ -93,8 +93,15 @@ CONTROL_RATE = 50.0  # [Hz] ARCHITECTURE.md: pure pursuit and speed control
 
 def default_config(localization: str) -> AutopilotConfig:
     """The autopilot's settings for a localization mode: ``AutopilotConfig.cautious()``
-    with ``raw`` (the ROS pipeline's broadcaster: a pose up to 150 ms old), else the defaults."""
-    return AutopilotConfig.cautious() if localization == "raw" else AutopilotConfig()
+    with ``raw`` (the ROS pipeline's broadcaster: a pose up to 150 ms old); the
+    midline on every lap with ``cones`` and ``slam`` (a pose to 0.2-0.3 m, for a
+    racing line that passes the cones 0.4 m off: autocross went off the track
+    with slam); else the defaults."""
+    if localization == "raw":
+        return AutopilotConfig.cautious()
+    if localization in ("cones", "slam"):
+        return AutopilotConfig(racing_line=False)
+    return AutopilotConfig()
 
 
 @dataclass(frozen=True, slots=True)

@@ -451,7 +451,12 @@ class PurePursuitConfig(Settings):
         downforce_per_mass: downforce per mass per speed squared [1/m]; the
             normal load per mass is g plus this times v^2.
         feedforward: steer the path's own curvature, with pure pursuit's
-            arc correcting only the error (``planner.pure_pursuit``).
+            arc correcting only the error (``planner.pure_pursuit``), where
+            the caller gives the pursued path's own curvature (the autopilot:
+            on the racing line; the midline's curvature at hand is the
+            global path's). On the racing line (tuning seeds, rtk) the CG's
+            offset from it fell from 0.13-0.15 m median, 0.4 m p95, to
+            0.04-0.12 m, 0.16-0.22 m.
         feedforward_preview: the feed-forward's curvature is taken this far
             ahead of the rear axle's projection, in time at the current
             speed [s].
@@ -471,7 +476,7 @@ class PurePursuitConfig(Settings):
     lookahead_radius_ratio: float = 1.0  # [-]
     slip_stiffness: float = 27.7  # [1/rad] fssim tyre B*C*D = 12.56 * 1.38 * 1.60
     downforce_per_mass: float = 0.01  # [1/m] fssim C_Down 1.903 N s^2/m^2 / 190 kg
-    feedforward: bool = False
+    feedforward: bool = True
     feedforward_preview: float = (
         0.15  # [s] tuning seeds: 0.1 s 92.5 % clean, 0.15 s 97.5 %, 0.2 s 85 %
     )
@@ -644,16 +649,19 @@ class AutopilotConfig(Settings):
         racing_line: once lap 1 is driven (the sensor has gone once round the
             global path's loop), follow a racing line through the cones lap 1
             saw (``planner.lap_map``) instead of the cones' midline, with the
-            speeds of its own speed plan; the cones still classify and plan
-            (their plans are kept and recorded) but no longer steer. An open
-            path, or a map no line fits, keeps the midline. On tuning seeds
-            7000-7039 (rtk, 2 laps; the midline: 100 % clean, lap 2 / limit
-            1.35 median) at ``racing_margin`` 0.8 m: 100 % clean, 1.29; at
-            0.6 m 67.5 %, 1.22; at 0.4 m none (pure pursuit's 0.3-0.4 m p95
-            tracking error meets the cones the line passes). Held out (seeds
-            9000-9199) at 0.8 m: clean 99.5 / 99 / 94 % (ideal / rtk / harsh
-            faults), lap 2 / limit 1.29-1.32; harsh is short of issue 15's
-            95 %, so it is off by default.
+            speeds of its own speed plan and pure pursuit's curvature
+            feed-forward (``pure_pursuit.feedforward``); the cones still
+            classify and plan (their plans are kept and recorded) but steer
+            only where the pose disagrees with the map
+            (``racing_map_tolerance``). An open path, a map no line fits, or
+            a line no faster than the midline keeps the midline. Off in
+            ``cautious()`` (a lagging pose). Tuning seeds 7000-7039 (2 laps;
+            the midline: 100 % clean, lap 2 / limit 1.35 median), rtk: pure
+            pursuit at ``racing_margin`` 0.8 m 100 % clean, 1.28; at 0.6 m
+            65 %, 1.22 (its 0.4 m p95 tracking error); with the feed-forward
+            at 0.6 m 97.5 %, 1.23; with the body's sweep counted too, at
+            0.5 m 100 %, 1.22, and at 0.4 m 100 % clean with ideal, rtk
+            and harsh faults alike, 1.195-1.198.
         racing_margin: the racing line keeps the car's centre
             ``midline.body_half_width`` plus this from the mapped boundaries [m].
         racing_map_tolerance: the racing line steers only while the scan's
@@ -680,8 +688,8 @@ class AutopilotConfig(Settings):
     pursue_global_beyond_path: bool = True
     pursue_global_max_gap: float = 1.0  # [m] raw pose (150 ms late): gaps up to 0.7 m
     lane_check_margin: float = 0.0  # [m]
-    racing_line: bool = False
-    racing_margin: float = 0.8  # [m]
+    racing_line: bool = True
+    racing_margin: float = 0.4  # [m]
     racing_map_tolerance: float = 0.2  # [m] rtk: 0.02-0.07; consumer GPS: 0.5-2
     global_path_min_scatter: float = 0.05  # [m] exact paths: 0.01-0.02 m
     speed_window: float = 0.1  # [s]
@@ -708,6 +716,8 @@ class AutopilotConfig(Settings):
             ),
             # The command's friction ellipse uses the profile's own limits.
             speed_control=SpeedControlConfig(lateral_grip=6.0, grip_aero=0.0),
+            # A racing line is followed by the pose, and this one lags.
+            racing_line=False,
         )
 
     def __post_init__(self) -> None:

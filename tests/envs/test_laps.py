@@ -28,7 +28,8 @@ def test_autopilot_completes_laps_cleanly(track: str, seed: int) -> None:
     assert result.cones_down_or_out == 0
     assert result.off_track_events == 0
     assert result.localization_pos_rmse_m is not None and result.localization_pos_rmse_m < 0.1
-    assert result.midline_rmse_m is not None and result.midline_rmse_m < 0.25
+    # From lap 2 the racing line uses the lane's width (the midline alone: < 0.25 m).
+    assert result.midline_rmse_m is not None and result.midline_rmse_m < 0.6
     # No lap beats the friction limit (the QSS is exact to 1e-4; a car at
     # full throttle on the acceleration lane ties it).
     assert all(lap >= result.limit_lap_time_s * (1 - 1e-4) for lap in result.lap_times_s)

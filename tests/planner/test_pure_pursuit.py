@@ -12,8 +12,8 @@ from conesim.planner import PurePursuitConfig, lookahead_distance, pure_pursuit
 from conesim.planner.pure_pursuit import find_lookahead_point, pure_pursuit_angle, rear_slip_angle
 
 CONFIG = PurePursuitConfig()  # L = 1.53 m, rear axle at x = -0.465 m in os_sensor
-# The geometry alone: no rear-axle slip (tested on its own below).
-GEOMETRIC = PurePursuitConfig(slip_stiffness=math.inf)
+# The geometry alone: no rear-axle slip and no feed-forward (tested on their own below).
+GEOMETRIC = PurePursuitConfig(slip_stiffness=math.inf, feedforward=False)
 
 
 def circle_through_axle(radius: float, left: bool = True) -> np.ndarray:
