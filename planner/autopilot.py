@@ -234,6 +234,7 @@ class Autopilot:
         self._map_tree: cKDTree | None = None  # the lap map's cones, once racing
         self._racing_on_map = True
         self.racing_off_map_count = 0  # scans steered by the midline: the pose off the map
+        self.on_racing_line = False  # whether the current path is the racing line's
         self._last_control: float | None = None
 
     # -- intermediates -----------------------------------------------------------------------
@@ -328,6 +329,7 @@ class Autopilot:
             racing = self._racing_segment()
         if racing is not None:
             path_reference, speeds, curvature = racing
+        self.on_racing_line = racing is not None
         self.path_curvature = curvature  # set with the plan it belongs to
         self.classified = classified
         self.station_hint = classified.sensor_station
@@ -546,7 +548,7 @@ class Autopilot:
         self.pursuit_path, curvature = self._pursuit_path(path, speed)
         cap = self._lookahead_cap(self.pursuit_path, curvature, speed)
         # The racing line's curvature is its own; the midline's is the global path's.
-        own = curvature if self.racing is not None else None
+        own = curvature if self.on_racing_line else None
         self.steering = pure_pursuit(self.pursuit_path, speed, c.pure_pursuit, cap, own)
         axle = np.array([c.pure_pursuit.rear_axle_x, 0.0])
         v_ref, a_ff = target_on_path(path, self.path_speeds, axle, speed, c.speed_control)

@@ -129,6 +129,7 @@ def test_a_pose_off_the_lap_map_hands_the_steering_back_to_the_cones(
     track = synth.circle_track(spacing=3.5)
     autopilot, _, trace = drive(synth, track, 18.0, racing, pose_error=(12.0, 0.6, 0.0))
     assert autopilot.racing is not None and autopilot.racing_off_map_count > 0
+    assert not autopilot.on_racing_line  # nor is the feed-forward given the midline's path
     late = np.array([math.hypot(p.x, p.y) for _, p, _ in trace[-300:]])  # the last 3 s
     assert np.max(np.abs(late - 15.0)) < 0.3
 
