@@ -130,3 +130,40 @@ def test_the_line_keeps_the_sweep_from_the_outer_boundary() -> None:
     expected = radius + width / 2 - CLEARANCE - (math.hypot(r + 0.7, 2.28) - r - 0.7)
     assert_allclose(np.hypot(*lines.line(0.0).T), expected, atol=5e-3)
     assert_allclose(np.hypot(*lines.line(1.0).T), radius - (width / 2 - CLEARANCE), atol=5e-3)
+
+
+def stadium(offset: float, step: float) -> np.ndarray:
+    """A counter-clockwise stadium (straights y = 0 and y = 20 from x = -20 to 20,
+    ends of R 10 m) moved ``offset`` [m] outward, every ~``step`` [m] from
+    (0, -offset) on."""
+    r = 10.0 + offset
+    x = np.linspace(-20.0, 20.0, 400, endpoint=False)
+    a = np.linspace(0.0, math.pi, 400, endpoint=False)
+    points = np.vstack([
+        np.column_stack([x, np.full_like(x, 10.0 - r)]),
+        np.column_stack([20.0 + r * np.sin(a), 10.0 - r * np.cos(a)]),
+        np.column_stack([-x, np.full_like(x, 10.0 + r)]),
+        np.column_stack([-20.0 - r * np.sin(a), 10.0 + r * np.cos(a)]),
+    ])  # fmt: skip
+    return Polyline(points, True).resample(step, start=20.0).points
+
+
+def test_a_lane_cone_between_wider_gate_cones_bounds_the_lane() -> None:
+    """A start gate on a stadium 3.3 m wide, cones 4.5 m apart: big orange cones
+    0.5 m wider 0.3 m either side of the right row's lane cone at (0, -1.65). At
+    that acute vertex the nearest segment's side flips: read signed, a point of
+    the centre line 1-2.7 m after it was 2 m outside the lane, both bounds
+    crossed, and the line was held 0.4 m from the cone (generated track 9150).
+    Unsigned, the lane is as wide there as elsewhere, and the lines keep the
+    clearance from the lane cone."""
+    half = 1.65
+    right = stadium(half, 4.5)
+    right = np.vstack([[[0.3, -half - 0.5]], right[1:], [[-0.3, -half - 0.5], [0.0, -half]]])
+    corridor = Corridor(
+        stadium(0.0, 0.5), Polyline(stadium(-half, 4.5), True), Polyline(right, True), CLEARANCE
+    )
+    _, lower, upper = offset_bounds(Polyline(corridor.centre, True).resample(1.0).points, corridor)
+    assert np.all(lower < upper)
+    for blend in (0.0, 1.0):
+        line = racing_lines(corridor).line(blend)
+        assert np.min(np.hypot(line[:, 0], line[:, 1] + half)) >= CLEARANCE - 1e-3
