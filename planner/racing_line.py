@@ -230,7 +230,9 @@ def offset_bounds(
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Unit left normals (n, 2) of a closed ``reference`` and its offsets' bounds (n,) [m].
 
-    Where the bounds cross, both are the middle of the two.
+    A point left of the left boundary, or right of the right one, has a
+    negative distance to it; where the bounds cross, both are the middle of
+    the two.
     """
     ring = Polyline(reference, True)
     tangents = ring.tangents()
@@ -241,12 +243,8 @@ def offset_bounds(
     # at 1 m, in a ripple a line pressed on the bound takes, and a speed plan
     # reads: 2 mm at 3.5 m cost a R 15 m ring 1 % of its lap).
     dense = _between(reference)
-    # Unsigned: at a boundary's acute vertex (a lane cone between a gate's wider
-    # big orange ones) the side of the nearest segment flips, and a point 2 m
-    # inside the lane read as 2 m outside it. The reference (the global path,
-    # then lines inside the bounds) lies inside the lane.
-    d_left = np.abs(corridor.left.project(dense).lateral)
-    d_right = np.abs(corridor.right.project(dense).lateral)
+    d_left = -corridor.left.project(dense).lateral
+    d_right = corridor.right.project(dense).lateral
     step = float(np.mean(ring.segment_lengths))
     window = max(1, 2 * round(0.5 * SMOOTHING_M / step) + 1)  # odd, about SMOOTHING_M
     sweeps = [np.zeros(len(dense)), np.zeros(len(dense))]  # [to the left, to the right]

@@ -196,6 +196,7 @@ class Polyline:
             seg = d[best]
             length = np.sqrt(seg_len2[best])
             cross = seg[:, 0] * (qc[:, 1] - f[:, 1]) - seg[:, 1] * (qc[:, 0] - f[:, 0])
+            cross = self._vertex_sides(qc, f, best, t[pick, best], cross)
             station[rows] = cum[best] + t[pick, best] * length
             offset[rows] = cross / length
             distance[rows] = np.sqrt(dist2[pick, best])
@@ -203,6 +204,32 @@ class Polyline:
             tangent[rows] = seg / length[:, None]
             segment[rows] = best
         return Projection(foot_out, segment, station, offset, tangent, distance)
+
+    def _vertex_sides(
+        self,
+        q: FloatArray,
+        foot: FloatArray,
+        best: NDArray[np.intp],
+        t: FloatArray,
+        cross: FloatArray,
+    ) -> FloatArray:
+        """``cross`` with its sign taken, where the foot is a vertex between two
+        segments, from the vertex's bisecting normal (the sum of the two segments'
+        unit left normals): at an acute vertex the chosen segment's own side is
+        wrong for the points ahead of it (a lane cone between a gate's wider
+        cones: a point 2 m inside the lane read as 2 m outside)."""  # fmt: skip
+        m = len(self.deltas)
+        at_start = (t <= 0.0) & ((best > 0) | self.closed)
+        at_end = (t >= 1.0) & ((best < m - 1) | self.closed)
+        vertex = at_start | at_end
+        if not vertex.any() or m < 2:
+            return cross
+        other = np.where(at_start, best - 1, best + 1) % m
+        unit = self.deltas / np.maximum(np.hypot(*self.deltas.T), 1e-18)[:, None]
+        bisector = unit[best] + unit[other]  # the normals' sum, turned back by 90 deg
+        side = bisector[:, 0] * (q[:, 1] - foot[:, 1]) - bisector[:, 1] * (q[:, 0] - foot[:, 0])
+        flipped = vertex & (side * cross < 0.0)
+        return np.where(flipped, -cross, cross)
 
     def tangents(self) -> FloatArray:
         """(n, 2) unit tangents at the vertices by central differences

@@ -193,3 +193,15 @@ def test_projection_select_keeps_rows() -> None:
     assert picked.segment.tolist() == [3, 0]
     assert_array_equal(picked.station, proj.station[[2, 0]])
     assert_array_equal(picked.lateral, proj.lateral[[2, 0]])
+
+
+def test_side_at_an_acute_vertex_is_the_vertex_own() -> None:
+    """A spike (0, 0) -> (0.3, 0.5) -> (0.6, 0) on a line along +x: (1.4, 1.66) is
+    nearest the tip, 1.66 m above the line and 0.5 + 1.16 m above the tip, so on
+    its left; left of the second segment, right of the first one's direction
+    (cross((0.3, 0.5), (1.1, 1.16)) = -0.2): the vertex decides, not the segment
+    a tie picks. A point on the right of both stays right."""
+    line = Polyline(np.array([[-5.0, 0.0], [0.0, 0.0], [0.3, 0.5], [0.6, 0.0], [5.0, 0.0]]))
+    proj = line.project(np.array([[1.4, 1.66], [0.3, 0.2]]))
+    assert proj.lateral[0] == pytest.approx(np.hypot(1.1, 1.16))
+    assert proj.lateral[1] < 0.0  # below the tip, inside the spike's notch

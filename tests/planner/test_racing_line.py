@@ -151,11 +151,11 @@ def stadium(offset: float, step: float) -> np.ndarray:
 def test_a_lane_cone_between_wider_gate_cones_bounds_the_lane() -> None:
     """A start gate on a stadium 3.3 m wide, cones 4.5 m apart: big orange cones
     0.5 m wider 0.3 m either side of the right row's lane cone at (0, -1.65). At
-    that acute vertex the nearest segment's side flips: read signed, a point of
-    the centre line 1-2.7 m after it was 2 m outside the lane, both bounds
-    crossed, and the line was held 0.4 m from the cone (generated track 9150).
-    Unsigned, the lane is as wide there as elsewhere, and the lines keep the
-    clearance from the lane cone."""
+    that acute vertex the chosen segment's side is wrong: a point of the centre
+    line 1-2.7 m after it read as 2 m outside the lane, both bounds crossed,
+    and the line was held 0.4 m from the cone (generated track 9150). With the
+    vertex's own side (``Polyline.project``) the lane is as wide there as
+    elsewhere, and the lines keep the clearance from the lane cone."""
     half = 1.65
     right = stadium(half, 4.5)
     right = np.vstack([[[0.3, -half - 0.5]], right[1:], [[-0.3, -half - 0.5], [0.0, -half]]])
