@@ -45,6 +45,7 @@ speed). The same are attributes of the autopilot (``classified``, ``plan``,
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import logging
 import math
@@ -235,6 +236,9 @@ class Autopilot:
         self._racing_on_map = True
         self.racing_off_map_count = 0  # scans steered by the midline: the pose off the map
         self.on_racing_line = False  # whether the current path is the racing line's
+        self._racing_speed_control = dataclasses.replace(  # its target speed's preview
+            self.config.speed_control, preview_time=self.config.racing_speed_preview
+        )
         self._last_control: float | None = None
 
     # -- intermediates -----------------------------------------------------------------------
@@ -358,14 +362,14 @@ class Autopilot:
         try:
             m = c.midline
             path = self.lap_map.racing_path(
-                self.global_path, m.body_half_width + c.racing_margin, c.speed_profile,
+                self.global_path, m.body_half_width + c.racing_margin, c.racing_speed_profile,
                 body=(m.body_half_width, m.body_front),
             )  # fmt: skip
         except (ValueError, ArithmeticError) as exc:
             _log.warning("no racing line through the lap-1 map (%s); the midline stays", exc)
             self.lap_map = None
             return
-        racing = GlobalSpeedPlan(path, c.speed_profile)
+        racing = GlobalSpeedPlan(path, c.racing_speed_profile)
         plan_s = lap_time(racing)
         midline_s = math.inf if self.global_speed is None else lap_time(self.global_speed)
         if plan_s >= midline_s:
@@ -420,7 +424,8 @@ class Autopilot:
         s = stations - stations[0]
         v = racing.speeds_at(stations)
         v[0] = min(v[0], max(self.speed(), 0.0))
-        return points, forward_pass(s, v, c.speed_profile.a_drive), racing.curvature_at(stations)
+        v = forward_pass(s, v, c.racing_speed_profile.a_drive)
+        return points, v, racing.curvature_at(stations)
 
     def _global_speeds(
         self, path: FloatArray, s: FloatArray | None, *, sensor_station: float
@@ -551,7 +556,8 @@ class Autopilot:
         own = curvature if self.on_racing_line else None
         self.steering = pure_pursuit(self.pursuit_path, speed, c.pure_pursuit, cap, own)
         axle = np.array([c.pure_pursuit.rear_axle_x, 0.0])
-        v_ref, a_ff = target_on_path(path, self.path_speeds, axle, speed, c.speed_control)
+        preview = self._racing_speed_control if self.on_racing_line else c.speed_control
+        v_ref, a_ff = target_on_path(path, self.path_speeds, axle, speed, preview)
         self.target_speed = v_ref
         a_lat = speed * speed * math.tan(self.steering.steering) / c.pure_pursuit.wheelbase
         acceleration = self.speed_controller.step(v_ref, speed, dt, a_ff, a_lat)

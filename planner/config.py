@@ -48,28 +48,37 @@ class Settings:
 
     @classmethod
     def from_dict(cls, values: Mapping[str, Any]) -> Self:
-        """Build the settings from ``values``; nested settings may be mappings too.
+        """Build the settings from ``values`` over the defaults (``updated``).
 
         Raises:
             ValueError: a key that is not a field, with the allowed keys listed,
                 or a value out of range.
         """
-        fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
-        unknown = sorted(set(values) - set(fields))
+        return cls().updated(values)
+
+    def updated(self, values: Mapping[str, Any]) -> Self:
+        """These settings with ``values`` in place of theirs; a nested settings'
+        mapping updates that field's own value (``racing_speed_profile:
+        {a_lat_max: 14}`` keeps the racing line's other limits).
+
+        Raises:
+            ValueError: a key that is not a field, with the allowed keys listed,
+                or a value out of range.
+        """
+        names = {f.name for f in dataclasses.fields(self)}  # type: ignore[arg-type]
+        unknown = sorted(set(values) - names)
         if unknown:
             raise ValueError(
-                f"{cls.__name__}: unknown keys {unknown}; allowed keys: {sorted(fields)}"
+                f"{type(self).__name__}: unknown keys {unknown}; allowed keys: {sorted(names)}"
             )
         kwargs: dict[str, Any] = {}
         for name, value in values.items():
-            spec = fields[name]
-            factory = spec.default_factory
-            template = factory() if factory is not dataclasses.MISSING else spec.default
-            if isinstance(template, Settings) and isinstance(value, Mapping):
-                kwargs[name] = type(template).from_dict(value)
+            current = getattr(self, name)
+            if isinstance(current, Settings) and isinstance(value, Mapping):
+                kwargs[name] = current.updated(value)
             else:
                 kwargs[name] = value
-        return cls(**kwargs)
+        return dataclasses.replace(self, **kwargs)  # type: ignore[type-var]
 
 
 @dataclass(frozen=True)
@@ -344,6 +353,13 @@ class SpeedProfileConfig(Settings):
             unloads the rear axle, which still brakes with 40 % of the force
             (``envs.traction``): braking hard into a corner at the full
             lateral limit, the rear lets go.
+        drive_lateral_share: the drive pass's ellipse is
+            ``a_drive * sqrt(1 - (a_lat / (share a_lat(v)))^2)`` [-], from 1
+            to 2: above 1 the car accelerates out of a corner while still
+            turning at its planned limit, on the grip the tyre has beyond
+            that limit (15.7 m/s^2 at rest: 1.2 times 13 is the tyre's own
+            ellipse). The speed controller's ellipse (``speed_control.
+            lateral_grip``) still bounds the command.
         lock_radius: the car's full-lock radius at the rear axle [m]
             (L / tan(max_steer) = 1.53 / tan(0.47) = 3.0 m). Near it the car
             has no steering left to correct with, and its front end sweeps
@@ -392,6 +408,7 @@ class SpeedProfileConfig(Settings):
     # but was clean less often on generated tracks 1070-1169 (rtk 97 % vs 98 %,
     # harsh faults 91 % vs 96 %).
     brake_lateral_share: float = 1.0  # [-]
+    drive_lateral_share: float = 1.0  # [-]
     lock_radius: float = 3.0  # [m]
     lock_share_min: float = 0.15  # [-]
     steering_rate_max: float = 0.63  # [rad/s] EUFS QEV3 (VehicleParams.max_steer_rate)
@@ -412,6 +429,7 @@ class SpeedProfileConfig(Settings):
         _check("SpeedProfileConfig", "wheelbase", self.wheelbase, 1e-9)
         _check("SpeedProfileConfig", "lock_share_min", self.lock_share_min, 1e-9, 1.0)
         _check("SpeedProfileConfig", "brake_lateral_share", self.brake_lateral_share, 1e-3, 1.0)
+        _check("SpeedProfileConfig", "drive_lateral_share", self.drive_lateral_share, 1.0, 2.0)
         _check("SpeedProfileConfig", "steering_weight_min", self.steering_weight_min, 0.0, 1.0)
 
     # The groups the compiled profile (``planner.kernels``) reads by name, built
@@ -593,6 +611,16 @@ class ConeMemoryConfig(Settings):
         return self.keep_scans > 0
 
 
+def _racing_speed_profile() -> SpeedProfileConfig:
+    """The racing line's speed limits: ``SpeedProfileConfig``'s, with 13 of
+    the tyre's 15.7 m/s^2 at rest (and the downforce's share at the same
+    13 / 15.7) where the midline plans 12, and a drive pass whose friction
+    ellipse is 1.2 times as wide (its lateral limit's 15.6 m/s^2, the tyre's
+    own): the plan is the car's, not pure pursuit's margin for a path it
+    sees a scan at a time."""
+    return SpeedProfileConfig(a_lat_max=13.0, a_lat_aero=0.0132, drive_lateral_share=1.2)
+
+
 @dataclass(frozen=True)
 class AutopilotConfig(Settings):
     """The whole autopilot: its stages' settings and frame names (its rate is the loop's).
@@ -601,6 +629,18 @@ class AutopilotConfig(Settings):
         classifier: cone side classification.
         midline: Delaunay midline planning.
         speed_profile: speed limits along the path.
+        racing_speed_profile: the racing line's speed limits
+            (``racing_line``): its own, because that line is known and
+            smooth. It is planned once through the whole mapped lap, with
+            the curvature fed forward, where the cones' midline is seen a
+            scan at a time and followed by pure pursuit alone; so it takes
+            more of the tyre than ``speed_profile`` (``_racing_speed_profile``).
+            Tuning seeds 7000-7039, rtk, lap 2 / limit median at the limits
+            of ``speed_profile``: 1.195; with a_lat_max 13 for every lap
+            1.170 (14: 1.147, but 92.5 % clean); the line's plan alone,
+            timed offline on seeds 7000-7019, 1.182 at those limits, 1.147
+            at 13, 1.163 with the drive ellipse 1.31 times as wide, 1.133
+            with both.
         pure_pursuit: steering.
         speed_control: longitudinal control.
         cone_memory: the cones of the last scans added to each scan.
@@ -669,6 +709,15 @@ class AutopilotConfig(Settings):
         racing_map_tolerance: the racing line steers only while the scan's
             cones, placed by the pose, stand within this (their median) of
             the lap map's; else the cones' midline does [m].
+        racing_speed_preview: on the racing line the speed controller reads
+            its target this far ahead [s] (``speed_control.preview_time``,
+            0.3 s, elsewhere). The line's plan is one smooth plan whose
+            acceleration is fed forward; read 0.3 s ahead the car braked that
+            much early, still turning at the plan's full lateral limit, and
+            in S-bends the rear let go. Tuning seeds 7000-7039, rtk, with
+            ``racing_speed_profile``'s limits: 0.3 s 97.5 % clean, lap 2 /
+            limit 1.165 median; 0.15 s 100 %, 1.147; 0.1 s 97.5 %, 1.141
+            (lap 1's midline at 0.1 s: 90 %, at 0 s 80 %).
         global_path_min_scatter: a global path whose points scatter more
             than this about a smooth curve is smoothed before use
             (``planner.global_fit``: a surveyed path's error would read as
@@ -682,6 +731,7 @@ class AutopilotConfig(Settings):
     classifier: ClassifierConfig = field(default_factory=ClassifierConfig)
     midline: MidlineConfig = field(default_factory=MidlineConfig)
     speed_profile: SpeedProfileConfig = field(default_factory=SpeedProfileConfig)
+    racing_speed_profile: SpeedProfileConfig = field(default_factory=_racing_speed_profile)
     pure_pursuit: PurePursuitConfig = field(default_factory=PurePursuitConfig)
     speed_control: SpeedControlConfig = field(default_factory=SpeedControlConfig)
     cone_memory: ConeMemoryConfig = field(default_factory=ConeMemoryConfig)
@@ -693,6 +743,7 @@ class AutopilotConfig(Settings):
     racing_line: bool = True
     racing_margin: float = 0.4  # [m]
     racing_map_tolerance: float = 0.2  # [m] rtk: 0.02-0.07; consumer GPS: 0.5-2
+    racing_speed_preview: float = 0.15  # [s]
     global_path_min_scatter: float = 0.05  # [m] exact paths: 0.01-0.02 m
     speed_window: float = 0.1  # [s]
     reference_frame: str = FRAME_REFERENCE
@@ -729,6 +780,7 @@ class AutopilotConfig(Settings):
         _check("AutopilotConfig", "lane_check_margin", self.lane_check_margin, -math.inf)
         _check("AutopilotConfig", "racing_margin", self.racing_margin, 0.0, 2.0)
         _check("AutopilotConfig", "racing_map_tolerance", self.racing_map_tolerance, 0.0)
+        _check("AutopilotConfig", "racing_speed_preview", self.racing_speed_preview, 0.0, 2.0)
         if self.speed_source not in ("local", "global"):
             raise ValueError(
                 f"AutopilotConfig.speed_source = {self.speed_source!r}: allowed 'local', 'global'"

@@ -179,6 +179,8 @@ class PassSettings(NamedTuple):
             ``speed_profile.forward_pass``).
         brake_lateral_share: the brake pass's ellipse takes this share of
             the lateral limit as its whole [-] (1: the same ellipse).
+        drive_lateral_share: the drive pass's ellipse takes this share of
+            the lateral limit as its whole [-] (1: the same ellipse).
     """
 
     friction_ellipse: bool
@@ -189,6 +191,7 @@ class PassSettings(NamedTuple):
     horizon_stop: bool
     brake: bool
     brake_lateral_share: float = 1.0
+    drive_lateral_share: float = 1.0
 
 
 class LaneSettings(NamedTuple):

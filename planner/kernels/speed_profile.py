@@ -193,9 +193,11 @@ def profile_passes(s, kappa, v, jerk, has_start, v_start, has_end, v_end, passes
         if start < v[0]:  # noqa: PLR1730 (Python's min(v[0], start))
             v[0] = start
     if ellipse:
+        drive_lat = a_lat * passes.drive_lateral_share
+        drive_aero = a_lat_aero * passes.drive_lateral_share
         for i in range(1, n):
             u = v[i - 1]
-            a = a_drive * _ellipse_scale(u, kappa[i - 1], a_lat, a_lat_aero)
+            a = a_drive * _ellipse_scale(u, kappa[i - 1], drive_lat, drive_aero)
             x = math.sqrt(u * u + 2.0 * a * (s[i] - s[i - 1]))
             if x < v[i]:  # noqa: PLR1730 (Python's min(v[i], x))
                 v[i] = x

@@ -115,6 +115,56 @@ def test_after_lap_one_the_car_races_the_inner_circle(synth: ModuleType) -> None
     assert late.min() > 14.5 and late.max() < 14.8  # the antenna, ahead of the axle
 
 
+def stadium(synth: ModuleType, straight: float = 30.0, radius: float = 10.0):
+    """A counter-clockwise stadium: straights of ``straight`` at y = -+radius,
+    half circles about (+-straight / 2, 0), 3 m wide, cones every 3 m."""
+    half = 0.5 * straight
+    x = np.arange(-half, half, 0.25)
+    a = np.arange(-math.pi / 2, math.pi / 2, 0.25 / radius)
+    centre = np.vstack(
+        [
+            np.column_stack([x, np.full_like(x, -radius)]),
+            np.column_stack([half + radius * np.cos(a), radius * np.sin(a)]),
+            np.column_stack([-x, np.full_like(x, radius)]),
+            np.column_stack([-half - radius * np.cos(a), -radius * np.sin(a)]),
+        ]
+    )
+    return synth.build_track(centre, True, 3.0, 3.0)
+
+
+def test_the_racing_speed_preview_reads_the_racing_line_only(synth: ModuleType) -> None:
+    """On a stadium (straights into R = 10 m turns), lap 1 is the midline's: the
+    commands are the same, bit for bit, whatever ``racing_speed_preview``. On the
+    racing line a target read 1 s ahead rather than 0.15 s brakes for the turns
+    earlier: the car reaches each turn slower and laps slower."""
+    track = stadium(synth)
+    ring = np.vstack([track.centre, track.centre[:1]])
+    length = float(np.sum(np.hypot(*np.diff(ring, axis=0).T)))
+    runs = []
+    for preview in (0.15, 1.0):
+        config = AutopilotConfig.from_dict(
+            {"pure_pursuit": {"slip_stiffness": math.inf}, "racing_speed_preview": preview}
+        )
+        autopilot, commands, trace = drive(synth, track, 22.0, config)
+        assert autopilot.on_racing_line
+        runs.append((commands, trace))
+    (short, trace), (long, _) = runs
+    # The antenna's distance travelled: lap 1 (the sensor's) ends past one length.
+    xy = np.array([(p.x, p.y) for _, p, _ in trace])
+    travelled = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
+    lap_one = float(trace[int(np.searchsorted(travelled, length))][0])
+    first_change = next(i for i, (a, b) in enumerate(zip(short, long, strict=True)) if a != b)
+    # The map is done once the sensor, 0.8 m ahead of the antenna, is round
+    # (12.2 s); the racing line's first scan is the first at which they differ.
+    assert lap_one < short[first_change].stamp < lap_one + 1.5
+    speed_short = np.array([v for _, _, v in trace])
+    speed_long = np.array([v for _, _, v in runs[1][1]])
+    late = slice(int(np.searchsorted(travelled, length + 2.0 * length / 3.0)), None)
+    assert speed_long[late].mean() < speed_short[late].mean() - 0.5  # 11.9 against 13.1 m/s
+    far_long = np.sum(np.hypot(*np.diff([(p.x, p.y) for _, p, _ in runs[1][1]], axis=0).T))
+    assert far_long < travelled[-1] - 5.0  # 244 m against 255 m in 22 s
+
+
 def test_a_pose_off_the_lap_map_hands_the_steering_back_to_the_cones(
     synth: ModuleType,
 ) -> None:
@@ -151,7 +201,15 @@ def test_closed_loop_on_a_circle(synth: ModuleType, circle) -> None:
     assert (profile.a_lat_max, profile.a_lat_aero) == (12.0, 0.0122)
     v_circle = math.sqrt(12.0 / (1.0 / 15.0 - 0.0122))
     assert v_circle == pytest.approx(14.84, abs=0.01)
-    assert v_circle - 1.0 < speeds[-1] < v_circle + 0.3
+    # Lap 1 (94 m) is driven by 9 s; from there the racing line's own limit,
+    # 13 + 0.0132 v^2 (``racing_speed_profile``): 15.59 m/s on R = 15 m (the
+    # line keeps to R 14.9 m there, cones 5 m apart: 15.36-15.60 m/s planned).
+    t = np.array([stamp for stamp, _, _ in trace])
+    assert v_circle - 1.0 < speeds[np.searchsorted(t, 8.0)] < v_circle + 0.3
+    assert autopilot.on_racing_line
+    v_racing = math.sqrt(13.0 / (1.0 / 15.0 - 0.0132))
+    assert v_racing == pytest.approx(15.59, abs=0.01)
+    assert v_racing - 1.0 < speeds[-1] < v_racing + 0.3
     assert len(commands) == 600  # 50 Hz for 12 s
     assert autopilot.plan_count == 119  # 10 Hz, the first delivered at 0.1 s
     assert autopilot.fallback_count == autopilot.failed_count == autopilot.skipped_count == 0

@@ -30,6 +30,17 @@ def test_nested_mapping_builds_nested_settings() -> None:
     assert config.midline == planner.MidlineConfig()
 
 
+def test_a_nested_mapping_updates_the_field_s_own_default() -> None:
+    """The racing line's limits differ from SpeedProfileConfig's defaults: a
+    mapping that changes one of them keeps the others (13 + 0.0132 v^2, the
+    drive ellipse 1.2 times as wide), not SpeedProfileConfig()'s."""
+    config = planner.AutopilotConfig.from_dict({"racing_speed_profile": {"a_lat_max": 14.0}})
+    racing = config.racing_speed_profile
+    assert (racing.a_lat_max, racing.a_lat_aero, racing.drive_lateral_share) == (14.0, 0.0132, 1.2)
+    assert config.speed_profile == planner.SpeedProfileConfig()
+    assert planner.AutopilotConfig().racing_speed_profile.a_lat_max == 13.0
+
+
 def test_unknown_nested_key_raises() -> None:
     """Unknown keys are caught at every level."""
     with pytest.raises(ValueError, match="MidlineConfig: unknown keys \\['spline'\\]"):

@@ -149,6 +149,19 @@ def test_speed_profile_uses_the_ellipse_when_asked() -> None:
     assert ellipse[100] == pytest.approx(math.sqrt(60.0 * math.sin(0.5)), rel=5e-3)
 
 
+def test_a_wider_drive_ellipse_accelerates_harder_in_the_corner() -> None:
+    """d(v^2)/ds = 2 a sqrt(1 - (v^2 / (R q a_lat))^2) from rest gives
+    v^2 = R q a_lat sin(2 a s / (R q a_lat)): on R = 10 m at 5 m, q = 2 (an
+    ellipse of 12 m/s^2 around the 6 planned) 120 sin(0.25) = 29.69, v = 5.449 m/s,
+    where q = 1 gives 5.36; the corner's own limit, sqrt(60), stays."""
+    pts = arc(10.0, 40.0, step=0.05)
+    cfg = dataclasses.replace(FREE, friction_ellipse=True)
+    wide = speed_profile(pts, dataclasses.replace(cfg, drive_lateral_share=2.0), v_start=0.0)
+    assert wide[100] == pytest.approx(math.sqrt(120.0 * math.sin(0.25)), rel=5e-3)
+    assert speed_profile(pts, cfg, v_start=0.0)[100] < wide[100] - 0.08
+    assert wide.max() == pytest.approx(math.sqrt(60.0), rel=1e-6)
+
+
 def test_downforce_raises_the_corner_speed() -> None:
     """v^2 |kappa| = a_lat_max + a_lat_aero v^2: R = 20 m, 6 m/s^2, 0.01 1/m gives
     v = sqrt(6 / (0.05 - 0.01)) = 12.247 m/s (a_lat 7.5 = 6 + 0.01 * 150), turning

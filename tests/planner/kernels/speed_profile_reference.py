@@ -220,8 +220,9 @@ def ref_speed_profile(
         v[0] = min(v[0], max(v_start, 0.0))
     if config.friction_ellipse:
         c = config
+        q = c.drive_lateral_share
         v = ellipse_forward_pass(
-            s, v, kappa, c.a_drive, a_lat_max=c.a_lat_max, a_lat_aero=c.a_lat_aero
+            s, v, kappa, c.a_drive, a_lat_max=c.a_lat_max * q, a_lat_aero=c.a_lat_aero * q
         )
     else:
         v = forward_pass(s, v, config.a_drive)

@@ -52,6 +52,7 @@ PROFILE_CONFIGS = [
     for stop in (True, False)
 ] + [SpeedProfileConfig(steering_weight_min=w) for w in (0.0, 0.4)]
 PROFILE_CONFIGS += [SpeedProfileConfig(brake_lateral_share=q) for q in (0.5, 0.8)]
+PROFILE_CONFIGS += [SpeedProfileConfig(drive_lateral_share=q) for q in (1.2, 2.0)]
 
 
 def profile_cases(rng: np.random.Generator, trials: int) -> list[np.ndarray]:
