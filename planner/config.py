@@ -499,8 +499,10 @@ class PurePursuitConfig(Settings):
     # clean, 0.15 s 97.5 %, 0.2 s 85 %. At the racing line's own limits, on
     # seeds 9400-9599, 0.15 s turned into four S-bends 0.25 m early and hit
     # an inside cone (rtk 98.5 % clean, lap 2 / limit 1.152); 0.12 s drove
-    # those clean, and the tuning seeds at 100 %, 1.153 (0.15 s: 1.147).
-    feedforward_preview: float = 0.12  # [s]
+    # those clean, the tuning seeds 100 %, 1.153, and seeds 9600-9799 99 /
+    # 100 / 98 % (ideal / rtk / harsh), 1.157, but the trackdrive (seed 2)
+    # braked into its hairpin at 17 m/s^2, slid and lost three cones.
+    feedforward_preview: float = 0.15  # [s]
 
     def __post_init__(self) -> None:
         owner = "PurePursuitConfig"
@@ -707,9 +709,9 @@ class AutopilotConfig(Settings):
             and harsh faults alike, 1.195-1.198 (held out, seeds 9200-9399:
             clean 99.5 / 100 / 99 % (ideal / rtk / harsh), 1.20 median);
             with ``racing_speed_profile`` and ``racing_speed_preview``
-            100 % with all three, 1.146-1.148. Held out (seeds 9400-9599):
-            clean 100 / 98.5 / 99 %, lap 2 / limit 1.152 median
-            (1.113-1.280).
+            100 % with all three, 1.146-1.148. Held out (seeds
+            9400-9599): clean 100 / 98.5 / 99 %, lap 2 / limit 1.152
+            median (1.113-1.280).
         racing_margin: the racing line keeps the car's centre
             ``midline.body_half_width`` plus this from the mapped boundaries [m].
         racing_map_tolerance: the racing line steers only while the scan's
