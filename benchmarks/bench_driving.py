@@ -26,7 +26,8 @@ held-out sets, looked at once their figures were in), and 9000-9199's
 failures were looked at (they showed the racing line's gate bug), 9200-9399
 reported the racing line at the midline's speed limits, 9400-9599 at its
 own (their failures were looked at: the feed-forward's preview), 9600-9799
-its preview 0.12 s; the next held-out report uses seeds 9800 on.
+its preview 0.12 s, 9800-9999 the speed controller reading the line's
+curvature; the next held-out report uses seeds 10000 on.
 ``--set KEY=VALUE`` (as ``conesim run --set``) changes the base scenario,
 for a before / after comparison.
 
@@ -109,7 +110,7 @@ def main() -> None:
     """Run (or resume) the sweep and print the figures."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--tracks", type=int, default=200, help="tracks (seeds)")
-    parser.add_argument("--first", type=int, default=9800, help="first seed")
+    parser.add_argument("--first", type=int, default=10000, help="first seed")
     parser.add_argument("--workers", type=int, default=None, help="processes (all cores)")
     parser.add_argument("--profiles", default=",".join(PROFILES))
     parser.add_argument("--out", default=None, help="the sweep's directory (resumable)")
