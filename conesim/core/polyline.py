@@ -225,8 +225,10 @@ class Polyline:
         if not vertex.any() or m < 2:
             return cross
         other = np.where(at_start, best - 1, best + 1) % m
-        unit = self.deltas / np.maximum(np.hypot(*self.deltas.T), 1e-18)[:, None]
-        bisector = unit[best] + unit[other]  # the normals' sum, turned back by 90 deg
+        lengths = np.maximum(self.segment_lengths, 1e-18)[:, None]
+        bisector = (  # the unit normals' sum, turned back by 90 deg
+            self.deltas[best] / lengths[best] + self.deltas[other] / lengths[other]
+        )
         side = bisector[:, 0] * (q[:, 1] - foot[:, 1]) - bisector[:, 1] * (q[:, 0] - foot[:, 0])
         flipped = vertex & (side * cross < 0.0)
         return np.where(flipped, -cross, cross)
